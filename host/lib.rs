@@ -1,0 +1,1 @@
+pub use coil_kernels as kernels;

@@ -1,0 +1,125 @@
+//! Accelerations (Algorithm 1, lines 14-15): pressure, viscosity and gravity.
+
+use crate::cell_grid::Neighborhood;
+use crate::density::pressure;
+use crate::fluid::Fluid;
+use crate::real::Real;
+use crate::smoothing::SmoothingKernels;
+use crate::vec3::{SymTensor, Vec3};
+use crate::view::{SymTensorView, Vec3View, Vec3ViewMut, View};
+
+/// A discretisation of the viscous acceleration (1/rho) div tau. The operator is a type
+/// parameter of the acceleration pass, chosen once per run.
+pub trait ViscousOperator<R: Real>: Copy + Send + Sync {
+    /// What the operator reads of particle i once, before its neighbor loop.
+    type Own: Copy;
+    fn own(&self, i: usize, density_i: R) -> Self::Own;
+    /// Particle j's contribution to particle i's viscous acceleration divided by m_j
+    /// (m/s^2 per kg).
+    fn pair(&self, own: &Self::Own, j: usize, density_j: R, r2: R, grad_w: Vec3<R>, kernels: &SmoothingKernels<R>) -> Vec3<R>;
+}
+
+/// The paper's operator, Eq. (9): sum_j m_j (tau_i / rho_i^2 + tau_j / rho_j^2) · grad_i W,
+/// with the stress of the previous pass. Symmetric in i and j, so it conserves momentum.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct StressDivergence<'a, R> {
+    pub stress: SymTensorView<'a, R>,
+}
+
+impl<'a, R: Real> StressDivergence<'a, R> {
+    #[inline(always)]
+    fn stress_over_density2(&self, i: usize, density: R) -> SymTensor<R> {
+        let s = &self.stress;
+        SymTensor { xx: s.xx.at(i), yy: s.yy.at(i), zz: s.zz.at(i), xy: s.xy.at(i), xz: s.xz.at(i), yz: s.yz.at(i) }
+            .scaled(R::ONE / (density * density))
+    }
+}
+
+impl<R: Real> ViscousOperator<R> for StressDivergence<'_, R> {
+    type Own = SymTensor<R>;
+    #[inline(always)]
+    fn own(&self, i: usize, density_i: R) -> SymTensor<R> {
+        self.stress_over_density2(i, density_i)
+    }
+    #[inline(always)]
+    fn pair(&self, own: &SymTensor<R>, j: usize, density_j: R, _r2: R, grad_w: Vec3<R>, _: &SmoothingKernels<R>) -> Vec3<R> {
+        own.add(self.stress_over_density2(j, density_j)).dot(grad_w)
+    }
+}
+
+/// Müller et al. 2003's operator (the paper's Fig. 6 comparison): nu0 times the SPH Laplacian
+/// of velocity with the viscosity kernel, sum_j m_j nu0 (v_j - v_i) / rho_j lap W. Newtonian
+/// only, and needs no velocity-gradient or stress pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct VelocityLaplacian<'a, R> {
+    /// nu0 (m^2/s).
+    pub nu0: R,
+    /// Velocity at the current full step (m/s).
+    pub velocity: Vec3View<'a, R>,
+}
+
+impl<R: Real> ViscousOperator<R> for VelocityLaplacian<'_, R> {
+    type Own = Vec3<R>;
+    #[inline(always)]
+    fn own(&self, i: usize, _density_i: R) -> Vec3<R> {
+        let [x, y, z] = self.velocity.at(i);
+        Vec3::new(x, y, z)
+    }
+    #[inline(always)]
+    fn pair(&self, own: &Vec3<R>, j: usize, density_j: R, r2: R, _grad_w: Vec3<R>, kernels: &SmoothingKernels<R>) -> Vec3<R> {
+        let [x, y, z] = self.velocity.at(j);
+        (Vec3::new(x, y, z) - *own) * (self.nu0 * kernels.viscosity_laplacian(r2) / density_j)
+    }
+}
+
+/// Acceleration of fluid particle `i` (m/s^2): pressure, Eq. (7), as an acceleration,
+/// -(1/rho_i) sum_j m_j (p_i + p_j) / (2 rho_j) grad_i W (Müller 2003's force over rho_i), plus
+/// the viscous operator, plus gravity. Symmetric in i and j: pair forces cancel.
+#[inline(always)]
+pub fn acceleration<R: Real, Op: ViscousOperator<R>>(
+    i: usize,
+    neighborhood: &Neighborhood,
+    density: &View<R>,
+    fluid: &Fluid<R>,
+    viscous: &Op,
+) -> Vec3<R> {
+    let rho_i = density.at(i);
+    let p_i = pressure(rho_i, fluid);
+    let own = viscous.own(i, rho_i);
+    let mut pressure_sum = Vec3::zero();
+    let mut viscous_sum = Vec3::zero();
+    neighborhood.for_each_neighbor(i, fluid.kernels.h2, |j, r_ij, r2| {
+        let rho_j = density.at(j);
+        let grad_w = fluid.kernels.spiky_gradient(r_ij, r2);
+        pressure_sum += grad_w * ((p_i + pressure(rho_j, fluid)) / rho_j);
+        viscous_sum += viscous.pair(&own, j, rho_j, r2, grad_w, &fluid.kernels);
+    });
+    let half = R::from_f64(0.5);
+    pressure_sum * (-half * fluid.mass / rho_i) + viscous_sum * fluid.mass + fluid.gravity
+}
+
+/// Arguments of the acceleration pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct AccelerationArgs<'a, R, Op> {
+    pub neighborhood: Neighborhood<'a>,
+    pub fluid: Fluid<R>,
+    pub viscous: Op,
+    pub id: View<'a, u32>,
+    pub density: View<'a, R>,
+    pub acceleration: Vec3ViewMut<'a, R>,
+}
+
+/// The acceleration pass for particle `i`; fixed boundary particles get zero.
+#[inline(always)]
+pub fn acceleration_pass<R: Real, Op: ViscousOperator<R>>(i: usize, a: &AccelerationArgs<R, Op>) {
+    let acc = if a.fluid.is_boundary(a.id.at(i)) {
+        Vec3::zero()
+    } else {
+        acceleration(i, &a.neighborhood, &a.density, &a.fluid, &a.viscous)
+    };
+    // SAFETY: invocation i owns entry i.
+    unsafe { a.acceleration.write(i, [acc.x, acc.y, acc.z]) };
+}

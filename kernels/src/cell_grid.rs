@@ -1,0 +1,122 @@
+//! The uniform neighbor grid: cell hashing (Algorithm 1, line 3) and the 27-cell neighbor loop.
+//!
+//! Cells are cubes of edge h covering the domain box, linearly indexed with x fastest. Particles
+//! are kept sorted by cell, so a cell's particles are the contiguous run
+//! `cell_start[c] .. cell_start[c + 1]` and three x-adjacent cells form one run.
+
+use crate::real::Real;
+use crate::vec3::Vec3;
+use crate::view::{Vec3View, View, ViewMut};
+
+/// Geometry of the cell grid (positions in m).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CellGrid {
+    /// Lower corner of the domain box (m).
+    pub origin: [f64; 3],
+    /// 1 / cell edge (1/m); the cell edge is the support radius h.
+    pub inverse_cell_size: f64,
+    /// Cells along x, y, z.
+    pub dims: [u32; 3],
+}
+
+impl CellGrid {
+    /// Number of cells; also the key of the bucket that collects particles outside the domain.
+    #[inline(always)]
+    pub fn cell_count(&self) -> u32 {
+        self.dims[0] * self.dims[1] * self.dims[2]
+    }
+
+    /// Integer cell coordinates of a position, or `None` outside the domain box.
+    #[inline(always)]
+    pub fn cell_coords(&self, p: [f64; 3]) -> Option<[u32; 3]> {
+        let mut c = [0u32; 3];
+        for a in 0..3 {
+            let f = (p[a] - self.origin[a]) * self.inverse_cell_size;
+            // `!(f >= 0)` also rejects NaN.
+            if !(f >= 0.0) || f >= self.dims[a] as f64 {
+                return None;
+            }
+            c[a] = f as u32;
+        }
+        Some(c)
+    }
+
+    #[inline(always)]
+    pub fn linear_index(&self, c: [u32; 3]) -> u32 {
+        c[0] + self.dims[0] * (c[1] + self.dims[1] * c[2])
+    }
+}
+
+/// Cell key of particle `i`: its linear cell index, or `cell_count()` when it has left the
+/// domain box (it is then sorted past every live particle and dropped).
+#[inline(always)]
+pub fn hash(i: usize, grid: &CellGrid, position: &Vec3View<f64>) -> u32 {
+    match grid.cell_coords(position.at(i)) {
+        Some(c) => grid.linear_index(c),
+        None => grid.cell_count(),
+    }
+}
+
+/// Arguments of the hashing pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct HashArgs<'a> {
+    pub grid: CellGrid,
+    pub position: Vec3View<'a, f64>,
+    pub cell_key: ViewMut<'a, u32>,
+}
+
+/// The hashing pass for particle `i`.
+#[inline(always)]
+pub fn hash_pass(i: usize, a: &HashArgs) {
+    // SAFETY: invocation i owns entry i.
+    unsafe { a.cell_key.write(i, hash(i, &a.grid, &a.position)) };
+}
+
+/// The sorted grid that neighbor loops read.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct Neighborhood<'a> {
+    pub grid: CellGrid,
+    /// `cell_count() + 2` entries: the start of each cell's run, then the live-particle count,
+    /// then the total including particles that left the domain.
+    pub cell_start: View<'a, u32>,
+    /// Particle positions (m), sorted by cell. Kept in f64 so that slow particles never lose
+    /// motion far from the origin; differences are taken in f64 and then rounded to `R`.
+    pub position: Vec3View<'a, f64>,
+}
+
+impl Neighborhood<'_> {
+    /// Calls `f(j, x_i - x_j, |x_i - x_j|^2)` for every particle j with |x_i - x_j| < h,
+    /// including i itself, in a fixed order (cells in index order, then sorted order).
+    #[inline(always)]
+    pub fn for_each_neighbor<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, i: usize, h2: R, mut f: F) {
+        let xi = self.position.at(i);
+        let Some(c) = self.grid.cell_coords(xi) else {
+            return;
+        };
+        let dims = self.grid.dims;
+        let x_lo = c[0].saturating_sub(1);
+        let x_hi = if c[0] + 1 < dims[0] { c[0] + 1 } else { c[0] };
+        for z in c[2].saturating_sub(1)..=(c[2] + 1).min(dims[2] - 1) {
+            for y in c[1].saturating_sub(1)..=(c[1] + 1).min(dims[1] - 1) {
+                let first = self.grid.linear_index([x_lo, y, z]) as usize;
+                let last = self.grid.linear_index([x_hi, y, z]) as usize;
+                let start = self.cell_start.at(first) as usize;
+                let end = self.cell_start.at(last + 1) as usize;
+                for j in start..end {
+                    let r_ij = Vec3::new(
+                        R::from_f64(xi[0] - self.position.x.at(j)),
+                        R::from_f64(xi[1] - self.position.y.at(j)),
+                        R::from_f64(xi[2] - self.position.z.at(j)),
+                    );
+                    let r2 = r_ij.norm2();
+                    if r2 < h2 {
+                        f(j, r_ij, r2);
+                    }
+                }
+            }
+        }
+    }
+}

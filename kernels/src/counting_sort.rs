@@ -1,0 +1,132 @@
+//! Counting sort of particles by cell key (Algorithm 1, line 3): histogram with atomics,
+//! exclusive scan, scatter, then a per-cell sort of each run by previous index. The keys are
+//! bounded cell indices, so this is the one pass of a radix sort with a radix of `cell_count + 1`.
+//!
+//! The atomic scatter fills each cell's run in whatever order the threads arrive; sorting the
+//! (short) run by previous index makes the permutation, and so every later floating-point sum,
+//! independent of scheduling: runs are bit-reproducible across thread counts and devices.
+
+use crate::view::{View, ViewMut};
+use core::marker::PhantomData;
+use core::sync::atomic::{AtomicU32, Ordering};
+
+/// Per-bucket counters updated with atomic adds (`atom.global.add` on the device).
+#[repr(C)]
+#[derive(Debug)]
+pub struct Counters<'a> {
+    ptr: *const AtomicU32,
+    len: usize,
+    _life: PhantomData<&'a [AtomicU32]>,
+}
+impl Clone for Counters<'_> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl Copy for Counters<'_> {}
+// SAFETY: all access goes through atomics.
+unsafe impl Send for Counters<'_> {}
+unsafe impl Sync for Counters<'_> {}
+
+impl<'a> Counters<'a> {
+    pub fn new(s: &'a [AtomicU32]) -> Self {
+        Self { ptr: s.as_ptr(), len: s.len(), _life: PhantomData }
+    }
+
+    /// # Safety
+    /// `ptr` must point to `len` u32 counters that outlive the view.
+    pub unsafe fn from_raw(ptr: *const AtomicU32, len: usize) -> Self {
+        Self { ptr, len, _life: PhantomData }
+    }
+
+    #[inline(always)]
+    fn get(&self, k: usize) -> &AtomicU32 {
+        debug_assert!(k < self.len);
+        // SAFETY: keys are below `cell_count + 1`, the length the backend allocates.
+        unsafe { &*self.ptr.add(k) }
+    }
+
+    #[inline(always)]
+    pub fn fetch_add(&self, k: usize) -> u32 {
+        self.get(k).fetch_add(1, Ordering::Relaxed)
+    }
+
+    #[inline(always)]
+    pub fn load(&self, k: usize) -> u32 {
+        self.get(k).load(Ordering::Relaxed)
+    }
+
+    #[inline(always)]
+    pub fn store(&self, k: usize, v: u32) {
+        self.get(k).store(v, Ordering::Relaxed)
+    }
+}
+
+/// Histogram: counts particle `i` in the bucket of its cell key.
+#[inline(always)]
+pub fn count_particle(i: usize, cell_key: View<u32>, counts: Counters) {
+    counts.fetch_add(cell_key.at(i) as usize);
+}
+
+/// Sum of the counts in chunk `chunk` (first pass of the exclusive scan).
+#[inline(always)]
+pub fn chunk_total(chunk: usize, chunk_len: usize, counts: Counters) -> u32 {
+    let start = chunk * chunk_len;
+    let end = (start + chunk_len).min(counts.len);
+    (start..end).map(|k| counts.load(k)).sum()
+}
+
+/// Exclusive scan of chunk `chunk`, offset by the total of all earlier chunks (second pass).
+/// Writes `bucket_start[k]` for the chunk's buckets, the cursor the scatter advances
+/// (`counts[k] = bucket_start[k]`), and, from the last chunk, the grand total.
+#[inline(always)]
+pub fn scan_chunk(chunk: usize, chunk_len: usize, chunk_offset: u32, counts: Counters, bucket_start: ViewMut<u32>) {
+    let start = chunk * chunk_len;
+    let end = (start + chunk_len).min(counts.len);
+    let mut running = chunk_offset;
+    for k in start..end {
+        let c = counts.load(k);
+        // SAFETY: each chunk owns its range of buckets.
+        unsafe { bucket_start.write(k, running) };
+        counts.store(k, running);
+        running += c;
+    }
+    if end == counts.len {
+        // SAFETY: only the last chunk writes the final entry.
+        unsafe { bucket_start.write(end, running) };
+    }
+}
+
+/// Scatter: places particle `i` at the next free slot of its bucket. `cursor` holds each
+/// bucket's next slot (left there by [`scan_chunk`]); `order[slot]` is the particle's old index.
+#[inline(always)]
+pub fn scatter(i: usize, cell_key: View<u32>, cursor: Counters, order: ViewMut<u32>) {
+    let slot = cursor.fetch_add(cell_key.at(i) as usize);
+    // SAFETY: the atomic add hands every slot to exactly one particle.
+    unsafe { order.write(slot as usize, i as u32) };
+}
+
+/// Sorts bucket `c`'s run of `order` by old index (insertion sort: runs hold ~8 particles).
+#[inline(always)]
+pub fn sort_bucket(c: usize, bucket_start: View<u32>, order: ViewMut<u32>) {
+    let start = bucket_start.at(c) as usize;
+    let end = bucket_start.at(c + 1) as usize;
+    for k in start + 1..end {
+        let v = order.at(k);
+        let mut m = k;
+        while m > start && order.at(m - 1) > v {
+            // SAFETY: bucket c's run is owned by this invocation.
+            unsafe { order.write(m, order.at(m - 1)) };
+            m -= 1;
+        }
+        // SAFETY: as above.
+        unsafe { order.write(m, v) };
+    }
+}
+
+/// Reorder: entry `k` of the sorted array is entry `order[k]` of the unsorted one.
+#[inline(always)]
+pub fn gather<T: Copy>(k: usize, order: View<u32>, unsorted: View<T>, sorted: ViewMut<T>) {
+    // SAFETY: each k is written by one invocation.
+    unsafe { sorted.write(k, unsorted.at(order.at(k) as usize)) };
+}

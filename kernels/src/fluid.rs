@@ -1,0 +1,29 @@
+//! Per-run constants of the fluid and its particles, shared by every kernel.
+
+use crate::real::Real;
+use crate::smoothing::SmoothingKernels;
+use crate::vec3::Vec3;
+
+/// Constants of one run, in SI units.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct Fluid<R> {
+    /// Mass of every particle m (kg).
+    pub mass: R,
+    /// Reference density rho0 (kg/m^3).
+    pub rest_density: R,
+    /// Squared speed of sound c^2 (m^2/s^2), Eq. (6).
+    pub sound_speed2: R,
+    /// Gravity g (m/s^2).
+    pub gravity: Vec3<R>,
+    pub kernels: SmoothingKernels<R>,
+    /// Particles with an id below this are fixed boundary particles (paper Sec. III-B).
+    pub boundary_count: u32,
+}
+
+impl<R: Real> Fluid<R> {
+    #[inline(always)]
+    pub fn is_boundary(&self, id: u32) -> bool {
+        id < self.boundary_count
+    }
+}

@@ -1,0 +1,36 @@
+//! coil's physics: each step of Algorithm 1 of Andrade et al., "SPH Fluids for Viscous Jet
+//! Buckling" (SIBGRAPI 2014) as a `no_std` function of one particle index.
+//!
+//! The CPU backend calls these functions over all particles with rayon; the CUDA backend runs
+//! the very same functions as PTX kernels (see `ptx`). Physics is written once, here.
+//!
+//! Per step: [`cell_grid::hash_pass`], the [`counting_sort`] stages and a gather of every
+//! particle field, [`density::density_pass`] (Eq. 5, 6), [`velocity_gradient::stress_pass`]
+//! (Eq. 8, 2, 3; the paper's operator only), [`acceleration::acceleration_pass`] (Eq. 7, 9 or
+//! Müller's Laplacian, gravity) and [`leapfrog::leapfrog_pass`].
+#![no_std]
+#![cfg_attr(target_arch = "nvptx64", feature(abi_ptx, link_llvm_intrinsics, stdarch_nvptx))]
+// `link_llvm_intrinsics` is how the device reaches NVVM's fast math (see `real`).
+#![cfg_attr(target_arch = "nvptx64", allow(internal_features))]
+
+#[cfg(not(target_arch = "nvptx64"))]
+extern crate std;
+
+pub mod acceleration;
+pub mod cell_grid;
+pub mod counting_sort;
+pub mod cross_viscosity;
+pub mod density;
+pub mod fluid;
+pub mod leapfrog;
+pub mod real;
+pub mod smoothing;
+pub mod vec3;
+pub mod velocity_gradient;
+pub mod view;
+
+#[cfg(target_arch = "nvptx64")]
+pub mod ptx;
+
+pub use real::Real;
+pub use vec3::{Mat3, SymTensor, Vec3};

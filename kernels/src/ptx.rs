@@ -1,0 +1,145 @@
+//! PTX entry points: one thread per particle (or cell, or scan chunk), each calling the same
+//! function the CPU backend runs. Names carry the precision and, where there is one, the
+//! physics variant, so the host picks the kernel of its run once.
+
+use crate::acceleration::{acceleration_pass, AccelerationArgs, StressDivergence, VelocityLaplacian};
+use crate::cell_grid::{hash_pass, HashArgs};
+use crate::counting_sort::{chunk_total, count_particle, gather, scan_chunk, scatter, sort_bucket, Counters};
+use crate::cross_viscosity::{Cross, Newtonian};
+use crate::density::{density_pass, DensityArgs};
+use crate::leapfrog::{leapfrog_pass, LeapfrogArgs};
+use crate::velocity_gradient::{stress_pass, StressArgs};
+use crate::view::{View, ViewMut};
+use core::arch::nvptx;
+
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    // SAFETY: `trap` aborts the kernel; the host sees a launch failure.
+    unsafe { nvptx::trap() }
+}
+
+/// This thread's index in a 1-D launch.
+#[inline(always)]
+fn thread_index() -> usize {
+    // SAFETY: reading special registers has no side effects.
+    unsafe { (nvptx::_block_idx_x() as usize) * (nvptx::_block_dim_x() as usize) + nvptx::_thread_idx_x() as usize }
+}
+
+macro_rules! per_index_kernel {
+    ($name:ident, $args:ty, $pass:expr) => {
+        #[no_mangle]
+        pub unsafe extern "ptx-kernel" fn $name(n: u32, args: $args) {
+            let i = thread_index();
+            if i < n as usize {
+                $pass(i, &args);
+            }
+        }
+    };
+}
+
+per_index_kernel!(hash, HashArgs<'static>, hash_pass);
+per_index_kernel!(density_f32, DensityArgs<'static, f32>, density_pass::<f32>);
+per_index_kernel!(density_f64, DensityArgs<'static, f64>, density_pass::<f64>);
+per_index_kernel!(stress_newtonian_f32, StressArgs<'static, f32, Newtonian<f32>>, stress_pass::<f32, Newtonian<f32>>);
+per_index_kernel!(stress_newtonian_f64, StressArgs<'static, f64, Newtonian<f64>>, stress_pass::<f64, Newtonian<f64>>);
+per_index_kernel!(stress_cross_f32, StressArgs<'static, f32, Cross<f32>>, stress_pass::<f32, Cross<f32>>);
+per_index_kernel!(stress_cross_f64, StressArgs<'static, f64, Cross<f64>>, stress_pass::<f64, Cross<f64>>);
+per_index_kernel!(
+    acceleration_stress_f32,
+    AccelerationArgs<'static, f32, StressDivergence<'static, f32>>,
+    acceleration_pass::<f32, StressDivergence<'static, f32>>
+);
+per_index_kernel!(
+    acceleration_stress_f64,
+    AccelerationArgs<'static, f64, StressDivergence<'static, f64>>,
+    acceleration_pass::<f64, StressDivergence<'static, f64>>
+);
+per_index_kernel!(
+    acceleration_laplacian_f32,
+    AccelerationArgs<'static, f32, VelocityLaplacian<'static, f32>>,
+    acceleration_pass::<f32, VelocityLaplacian<'static, f32>>
+);
+per_index_kernel!(
+    acceleration_laplacian_f64,
+    AccelerationArgs<'static, f64, VelocityLaplacian<'static, f64>>,
+    acceleration_pass::<f64, VelocityLaplacian<'static, f64>>
+);
+per_index_kernel!(leapfrog_f32, LeapfrogArgs<'static, f32>, leapfrog_pass::<f32>);
+per_index_kernel!(leapfrog_f64, LeapfrogArgs<'static, f64>, leapfrog_pass::<f64>);
+
+#[no_mangle]
+pub unsafe extern "ptx-kernel" fn count_particles(n: u32, cell_key: View<'static, u32>, counts: Counters<'static>) {
+    let i = thread_index();
+    if i < n as usize {
+        count_particle(i, cell_key, counts);
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "ptx-kernel" fn scan_chunk_totals(
+    chunks: u32,
+    chunk_len: u32,
+    counts: Counters<'static>,
+    totals: ViewMut<'static, u32>,
+) {
+    let c = thread_index();
+    if c < chunks as usize {
+        totals.write(c, chunk_total(c, chunk_len as usize, counts));
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "ptx-kernel" fn scan_chunks(
+    chunks: u32,
+    chunk_len: u32,
+    chunk_offsets: View<'static, u32>,
+    counts: Counters<'static>,
+    bucket_start: ViewMut<'static, u32>,
+) {
+    let c = thread_index();
+    if c < chunks as usize {
+        scan_chunk(c, chunk_len as usize, chunk_offsets.at(c), counts, bucket_start);
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "ptx-kernel" fn scatter_particles(
+    n: u32,
+    cell_key: View<'static, u32>,
+    cursor: Counters<'static>,
+    order: ViewMut<'static, u32>,
+) {
+    let i = thread_index();
+    if i < n as usize {
+        scatter(i, cell_key, cursor, order);
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "ptx-kernel" fn sort_buckets(buckets: u32, bucket_start: View<'static, u32>, order: ViewMut<'static, u32>) {
+    let c = thread_index();
+    if c < buckets as usize {
+        sort_bucket(c, bucket_start, order);
+    }
+}
+
+macro_rules! gather_kernel {
+    ($name:ident, $t:ty) => {
+        #[no_mangle]
+        pub unsafe extern "ptx-kernel" fn $name(
+            n: u32,
+            order: View<'static, u32>,
+            unsorted: View<'static, $t>,
+            sorted: ViewMut<'static, $t>,
+        ) {
+            let k = thread_index();
+            if k < n as usize {
+                gather(k, order, unsorted, sorted);
+            }
+        }
+    };
+}
+
+gather_kernel!(gather_u32, u32);
+gather_kernel!(gather_f32, f32);
+gather_kernel!(gather_f64, f64);

@@ -1,0 +1,187 @@
+//! Floating-point precision of the physics, chosen once per run (f32 or f64).
+//!
+//! Math that `core` lacks (`sqrt`, `exp2`, `log2`) goes to `std` on the host and to LLVM/NVVM
+//! intrinsics on nvptx: `libm` would compile to slow table-driven software math on the device.
+
+use core::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
+
+/// A floating-point type the kernels are generic over.
+pub trait Real:
+    Copy
+    + Default
+    + PartialOrd
+    + Send
+    + Sync
+    + 'static
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+    + AddAssign
+    + SubAssign
+    + MulAssign
+    + core::fmt::Debug
+{
+    const ZERO: Self;
+    const ONE: Self;
+    const NAME: &'static str;
+
+    fn from_f64(v: f64) -> Self;
+    fn to_f64(self) -> f64;
+    fn sqrt(self) -> Self;
+    fn exp2(self) -> Self;
+    fn log2(self) -> Self;
+    fn abs(self) -> Self;
+    fn is_finite(self) -> bool;
+
+    #[inline(always)]
+    fn max(self, other: Self) -> Self {
+        if self > other {
+            self
+        } else {
+            other
+        }
+    }
+
+    #[inline(always)]
+    fn min(self, other: Self) -> Self {
+        if self < other {
+            self
+        } else {
+            other
+        }
+    }
+
+    /// `self^e` for `self >= 0`; `0^e = 0` for the positive exponents of the Cross model.
+    #[inline(always)]
+    fn powf(self, e: Self) -> Self {
+        if self > Self::ZERO {
+            (e * self.log2()).exp2()
+        } else {
+            Self::ZERO
+        }
+    }
+}
+
+#[cfg(target_arch = "nvptx64")]
+mod device_math {
+    extern "C" {
+        #[link_name = "llvm.sqrt.f32"]
+        pub fn sqrt_f32(x: f32) -> f32;
+        #[link_name = "llvm.sqrt.f64"]
+        pub fn sqrt_f64(x: f64) -> f64;
+        #[link_name = "llvm.nvvm.ex2.approx.f"]
+        pub fn ex2_f32(x: f32) -> f32;
+        #[link_name = "llvm.nvvm.lg2.approx.f"]
+        pub fn lg2_f32(x: f32) -> f32;
+    }
+}
+
+impl Real for f32 {
+    const ZERO: Self = 0.0;
+    const ONE: Self = 1.0;
+    const NAME: &'static str = "f32";
+
+    #[inline(always)]
+    fn from_f64(v: f64) -> Self {
+        v as f32
+    }
+    #[inline(always)]
+    fn to_f64(self) -> f64 {
+        self as f64
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f32::abs(self)
+    }
+    #[inline(always)]
+    fn is_finite(self) -> bool {
+        f32::is_finite(self)
+    }
+    #[cfg(not(target_arch = "nvptx64"))]
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f32::sqrt(self)
+    }
+    #[cfg(not(target_arch = "nvptx64"))]
+    #[inline(always)]
+    fn exp2(self) -> Self {
+        f32::exp2(self)
+    }
+    #[cfg(not(target_arch = "nvptx64"))]
+    #[inline(always)]
+    fn log2(self) -> Self {
+        f32::log2(self)
+    }
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        unsafe { device_math::sqrt_f32(self) }
+    }
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn exp2(self) -> Self {
+        unsafe { device_math::ex2_f32(self) }
+    }
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn log2(self) -> Self {
+        unsafe { device_math::lg2_f32(self) }
+    }
+}
+
+impl Real for f64 {
+    const ZERO: Self = 0.0;
+    const ONE: Self = 1.0;
+    const NAME: &'static str = "f64";
+
+    #[inline(always)]
+    fn from_f64(v: f64) -> Self {
+        v
+    }
+    #[inline(always)]
+    fn to_f64(self) -> f64 {
+        self
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f64::abs(self)
+    }
+    #[inline(always)]
+    fn is_finite(self) -> bool {
+        f64::is_finite(self)
+    }
+    #[cfg(not(target_arch = "nvptx64"))]
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f64::sqrt(self)
+    }
+    #[cfg(not(target_arch = "nvptx64"))]
+    #[inline(always)]
+    fn exp2(self) -> Self {
+        f64::exp2(self)
+    }
+    #[cfg(not(target_arch = "nvptx64"))]
+    #[inline(always)]
+    fn log2(self) -> Self {
+        f64::log2(self)
+    }
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        unsafe { device_math::sqrt_f64(self) }
+    }
+    // PTX has no f64 `ex2`/`lg2`; they only feed the Cross exponent (K D)^n, where the f32
+    // approximation's ~2^-22 relative error is far below the discretisation error.
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn exp2(self) -> Self {
+        unsafe { device_math::ex2_f32(self as f32) as f64 }
+    }
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn log2(self) -> Self {
+        unsafe { device_math::lg2_f32(self as f32) as f64 }
+    }
+}

@@ -1,0 +1,67 @@
+//! The smoothing kernels of Müller, Charypar & Gross 2003 (the paper's [23]), support radius `h`.
+
+use crate::real::Real;
+use crate::vec3::Vec3;
+
+/// Kernel constants for one support radius, precomputed on the host.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct SmoothingKernels<R> {
+    /// Support radius h (m).
+    pub h: R,
+    /// h^2 (m^2).
+    pub h2: R,
+    poly6_coefficient: R,
+    spiky_gradient_coefficient: R,
+    viscosity_laplacian_coefficient: R,
+}
+
+impl<R: Real> SmoothingKernels<R> {
+    pub fn new(h: f64) -> Self {
+        let pi = core::f64::consts::PI;
+        let h3 = h * h * h;
+        let h6 = h3 * h3;
+        Self {
+            h: R::from_f64(h),
+            h2: R::from_f64(h * h),
+            poly6_coefficient: R::from_f64(315.0 / (64.0 * pi * h6 * h3)),
+            spiky_gradient_coefficient: R::from_f64(-45.0 / (pi * h6)),
+            viscosity_laplacian_coefficient: R::from_f64(45.0 / (pi * h6)),
+        }
+    }
+
+    /// poly6: W(r) = 315 / (64 pi h^9) (h^2 - r^2)^3 for r < h (1/m^3). Used by Eq. (5).
+    #[inline(always)]
+    pub fn poly6(&self, r2: R) -> R {
+        if r2 < self.h2 {
+            let d = self.h2 - r2;
+            self.poly6_coefficient * d * d * d
+        } else {
+            R::ZERO
+        }
+    }
+
+    /// Gradient of spiky W(r) = 15 / (pi h^6) (h - r)^3 with respect to x_i, for
+    /// `r_ij = x_i - x_j` (1/m^4). Used by Eq. (7), (8) and (9). Zero at r = 0, where its
+    /// direction is undefined: coincident particles get finite (zero) pair forces.
+    #[inline(always)]
+    pub fn spiky_gradient(&self, r_ij: Vec3<R>, r2: R) -> Vec3<R> {
+        if r2 < self.h2 && r2 > R::ZERO {
+            let r = r2.sqrt();
+            let d = self.h - r;
+            r_ij * (self.spiky_gradient_coefficient * d * d / r)
+        } else {
+            Vec3::zero()
+        }
+    }
+
+    /// Laplacian of Müller's viscosity kernel, 45 / (pi h^6) (h - r) for r < h (1/m^5).
+    #[inline(always)]
+    pub fn viscosity_laplacian(&self, r2: R) -> R {
+        if r2 < self.h2 {
+            self.viscosity_laplacian_coefficient * (self.h - r2.sqrt())
+        } else {
+            R::ZERO
+        }
+    }
+}

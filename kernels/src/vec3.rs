@@ -1,0 +1,185 @@
+//! Small fixed-size linear algebra for the kernels (glam stays on the host: its no_std path
+//! pulls in libm, which is slow software math on the device).
+
+use crate::real::Real;
+use core::ops::{Add, AddAssign, Mul, Neg, Sub};
+
+/// A 3-vector.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct Vec3<R> {
+    pub x: R,
+    pub y: R,
+    pub z: R,
+}
+
+impl<R: Real> Vec3<R> {
+    #[inline(always)]
+    pub const fn new(x: R, y: R, z: R) -> Self {
+        Self { x, y, z }
+    }
+    #[inline(always)]
+    pub fn zero() -> Self {
+        Self::new(R::ZERO, R::ZERO, R::ZERO)
+    }
+    #[inline(always)]
+    pub fn dot(self, o: Self) -> R {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+    #[inline(always)]
+    pub fn norm2(self) -> R {
+        self.dot(self)
+    }
+    #[inline(always)]
+    pub fn norm(self) -> R {
+        self.norm2().sqrt()
+    }
+}
+
+impl<R: Real> Add for Vec3<R> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Self::new(self.x + o.x, self.y + o.y, self.z + o.z)
+    }
+}
+impl<R: Real> AddAssign for Vec3<R> {
+    #[inline(always)]
+    fn add_assign(&mut self, o: Self) {
+        *self = *self + o;
+    }
+}
+impl<R: Real> Sub for Vec3<R> {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Self::new(self.x - o.x, self.y - o.y, self.z - o.z)
+    }
+}
+impl<R: Real> Mul<R> for Vec3<R> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, s: R) -> Self {
+        Self::new(self.x * s, self.y * s, self.z * s)
+    }
+}
+impl<R: Real> Neg for Vec3<R> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Self::new(-self.x, -self.y, -self.z)
+    }
+}
+
+/// A general 3x3 matrix, row-major: `m[a][b]`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Mat3<R> {
+    pub m: [[R; 3]; 3],
+}
+
+impl<R: Real> Mat3<R> {
+    #[inline(always)]
+    pub fn zero() -> Self {
+        Self { m: [[R::ZERO; 3]; 3] }
+    }
+
+    /// Adds `a ⊗ b` (`m[r][c] += a_r b_c`).
+    #[inline(always)]
+    pub fn add_outer(&mut self, a: Vec3<R>, b: Vec3<R>) {
+        let a = [a.x, a.y, a.z];
+        let b = [b.x, b.y, b.z];
+        for (row, ar) in self.m.iter_mut().zip(a) {
+            for (cell, bc) in row.iter_mut().zip(b) {
+                *cell += ar * bc;
+            }
+        }
+    }
+
+    #[inline(always)]
+    pub fn scaled(mut self, s: R) -> Self {
+        for row in self.m.iter_mut() {
+            for cell in row.iter_mut() {
+                *cell *= s;
+            }
+        }
+        self
+    }
+
+    /// `M + M^T`.
+    #[inline(always)]
+    pub fn symmetric_sum(self) -> SymTensor<R> {
+        let m = self.m;
+        SymTensor {
+            xx: m[0][0] + m[0][0],
+            yy: m[1][1] + m[1][1],
+            zz: m[2][2] + m[2][2],
+            xy: m[0][1] + m[1][0],
+            xz: m[0][2] + m[2][0],
+            yz: m[1][2] + m[2][1],
+        }
+    }
+}
+
+/// A symmetric 3x3 tensor stored by its six independent components.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct SymTensor<R> {
+    pub xx: R,
+    pub yy: R,
+    pub zz: R,
+    pub xy: R,
+    pub xz: R,
+    pub yz: R,
+}
+
+impl<R: Real> SymTensor<R> {
+    #[inline(always)]
+    pub fn zero() -> Self {
+        let z = R::ZERO;
+        Self { xx: z, yy: z, zz: z, xy: z, xz: z, yz: z }
+    }
+
+    /// `tr(T·T)`, the sum of the squares of all nine entries.
+    #[inline(always)]
+    pub fn double_contraction(self) -> R {
+        let two = R::ONE + R::ONE;
+        self.xx * self.xx
+            + self.yy * self.yy
+            + self.zz * self.zz
+            + two * (self.xy * self.xy + self.xz * self.xz + self.yz * self.yz)
+    }
+
+    #[inline(always)]
+    pub fn scaled(self, s: R) -> Self {
+        Self {
+            xx: self.xx * s,
+            yy: self.yy * s,
+            zz: self.zz * s,
+            xy: self.xy * s,
+            xz: self.xz * s,
+            yz: self.yz * s,
+        }
+    }
+
+    #[inline(always)]
+    pub fn add(self, o: Self) -> Self {
+        Self {
+            xx: self.xx + o.xx,
+            yy: self.yy + o.yy,
+            zz: self.zz + o.zz,
+            xy: self.xy + o.xy,
+            xz: self.xz + o.xz,
+            yz: self.yz + o.yz,
+        }
+    }
+
+    /// The matrix-vector product `T · v`.
+    #[inline(always)]
+    pub fn dot(self, v: Vec3<R>) -> Vec3<R> {
+        Vec3::new(
+            self.xx * v.x + self.xy * v.y + self.xz * v.z,
+            self.xy * v.x + self.yy * v.y + self.yz * v.z,
+            self.xz * v.x + self.yz * v.y + self.zz * v.z,
+        )
+    }
+}

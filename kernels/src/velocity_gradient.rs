@@ -1,0 +1,77 @@
+//! Velocity gradient, rate of deformation, shear rate and stress (Algorithm 1, lines 10-11).
+
+use crate::cell_grid::Neighborhood;
+use crate::cross_viscosity::Rheology;
+use crate::fluid::Fluid;
+use crate::real::Real;
+use crate::vec3::{Mat3, SymTensor, Vec3};
+use crate::view::{SymTensorViewMut, Vec3View, View};
+
+/// Velocity gradient, Eq. (8): grad v_i = sum_j (m_j / rho_j) (v_j - v_i) ⊗ grad_i W(x_ij)
+/// (1/s), with `m[a][b] = d v_a / d x_b`.
+#[inline(always)]
+pub fn velocity_gradient<R: Real>(
+    i: usize,
+    neighborhood: &Neighborhood,
+    velocity: &Vec3View<R>,
+    density: &View<R>,
+    fluid: &Fluid<R>,
+) -> Mat3<R> {
+    let [vx, vy, vz] = velocity.at(i);
+    let vi = Vec3::new(vx, vy, vz);
+    let mut grad = Mat3::zero();
+    neighborhood.for_each_neighbor(i, fluid.kernels.h2, |j, r_ij, r2| {
+        let [x, y, z] = velocity.at(j);
+        let dv = (Vec3::new(x, y, z) - vi) * (R::ONE / density.at(j));
+        grad.add_outer(dv, fluid.kernels.spiky_gradient(r_ij, r2));
+    });
+    grad.scaled(fluid.mass)
+}
+
+/// Rate-of-deformation tensor D = grad v + grad v^T (1/s), Sec. II.
+#[inline(always)]
+pub fn rate_of_deformation<R: Real>(velocity_gradient: Mat3<R>) -> SymTensor<R> {
+    velocity_gradient.symmetric_sum()
+}
+
+/// Shear rate D = sqrt(tr(D·D) / 2) (1/s), Eq. (2). The printed "trace(D)^2" is the trace of
+/// the squared tensor: the square of the trace vanishes for incompressible flow.
+#[inline(always)]
+pub fn shear_rate<R: Real>(deformation: SymTensor<R>) -> R {
+    (deformation.double_contraction() * R::from_f64(0.5)).sqrt()
+}
+
+/// Shear stress tau = rho nu(D) D (Pa), Eq. (2), with nu from `rheology` (Eq. (3)).
+#[inline(always)]
+pub fn stress<R: Real, Rh: Rheology<R>>(deformation: SymTensor<R>, density: R, rheology: &Rh) -> SymTensor<R> {
+    deformation.scaled(density * rheology.viscosity(shear_rate(deformation)))
+}
+
+/// Arguments of the velocity-gradient-and-stress pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct StressArgs<'a, R, Rh> {
+    pub neighborhood: Neighborhood<'a>,
+    pub fluid: Fluid<R>,
+    pub rheology: Rh,
+    /// Velocity at the current full step (m/s).
+    pub velocity: Vec3View<'a, R>,
+    pub density: View<'a, R>,
+    pub stress: SymTensorViewMut<'a, R>,
+}
+
+/// The stress pass for particle `i` (boundary particles included: Eq. (9) reads their stress).
+#[inline(always)]
+pub fn stress_pass<R: Real, Rh: Rheology<R>>(i: usize, a: &StressArgs<R, Rh>) {
+    let grad = velocity_gradient(i, &a.neighborhood, &a.velocity, &a.density, &a.fluid);
+    let tau = stress(rate_of_deformation(grad), a.density.at(i), &a.rheology);
+    // SAFETY: invocation i owns entry i.
+    unsafe {
+        a.stress.xx.write(i, tau.xx);
+        a.stress.yy.write(i, tau.yy);
+        a.stress.zz.write(i, tau.zz);
+        a.stress.xy.write(i, tau.xy);
+        a.stress.xz.write(i, tau.xz);
+        a.stress.yz.write(i, tau.yz);
+    }
+}

@@ -1,0 +1,219 @@
+//! Views of particle arrays that are the same on the host and on the device.
+//!
+//! A kernel receives `#[repr(C)]` pointer-and-length pairs by value, so the very same argument
+//! struct is built from Rust slices by the CPU backend and from device pointers by the CUDA
+//! backend. Each kernel invocation writes only the entries its index owns (or claims through an
+//! atomic counter), which is what makes the shared mutable view sound.
+
+use core::marker::PhantomData;
+
+/// A read-only view of `len` elements.
+#[repr(C)]
+#[derive(Debug)]
+pub struct View<'a, T> {
+    ptr: *const T,
+    len: usize,
+    _life: PhantomData<&'a [T]>,
+}
+
+impl<T> Clone for View<'_, T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<T> Copy for View<'_, T> {}
+// SAFETY: a view is a shared borrow of `[T]`.
+unsafe impl<T: Sync> Send for View<'_, T> {}
+unsafe impl<T: Sync> Sync for View<'_, T> {}
+
+impl<'a, T: Copy> View<'a, T> {
+    #[inline(always)]
+    pub fn new(s: &'a [T]) -> Self {
+        Self { ptr: s.as_ptr(), len: s.len(), _life: PhantomData }
+    }
+
+    /// A view of device memory.
+    ///
+    /// # Safety
+    /// `ptr` must point to `len` initialised elements that outlive the view.
+    #[inline(always)]
+    pub unsafe fn from_raw(ptr: *const T, len: usize) -> Self {
+        Self { ptr, len, _life: PhantomData }
+    }
+
+    #[inline(always)]
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    #[inline(always)]
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    #[inline(always)]
+    pub fn at(&self, i: usize) -> T {
+        debug_assert!(i < self.len);
+        // SAFETY: callers index particles below the count the backend sized the view to; the
+        // debug build checks it.
+        unsafe { *self.ptr.add(i) }
+    }
+}
+
+/// A view through which each kernel invocation writes the entries it owns.
+#[repr(C)]
+#[derive(Debug)]
+pub struct ViewMut<'a, T> {
+    ptr: *mut T,
+    len: usize,
+    _life: PhantomData<&'a mut [T]>,
+}
+
+impl<T> Clone for ViewMut<'_, T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<T> Copy for ViewMut<'_, T> {}
+// SAFETY: concurrent invocations write disjoint indices (see the module docs).
+unsafe impl<T: Send> Send for ViewMut<'_, T> {}
+unsafe impl<T: Send> Sync for ViewMut<'_, T> {}
+
+impl<'a, T: Copy> ViewMut<'a, T> {
+    #[inline(always)]
+    pub fn new(s: &'a mut [T]) -> Self {
+        Self { ptr: s.as_mut_ptr(), len: s.len(), _life: PhantomData }
+    }
+
+    /// A view of device memory.
+    ///
+    /// # Safety
+    /// `ptr` must point to `len` elements that outlive the view.
+    #[inline(always)]
+    pub unsafe fn from_raw(ptr: *mut T, len: usize) -> Self {
+        Self { ptr, len, _life: PhantomData }
+    }
+
+    #[inline(always)]
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    #[inline(always)]
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    #[inline(always)]
+    pub fn at(&self, i: usize) -> T {
+        debug_assert!(i < self.len);
+        // SAFETY: as for `View::at`.
+        unsafe { *self.ptr.add(i) }
+    }
+
+    /// Writes entry `i`.
+    ///
+    /// # Safety
+    /// No other invocation may read or write entry `i` concurrently.
+    #[inline(always)]
+    pub unsafe fn write(&self, i: usize, v: T) {
+        debug_assert!(i < self.len);
+        *self.ptr.add(i) = v;
+    }
+}
+
+/// Three arrays holding the x, y, z components of a per-particle vector.
+#[repr(C)]
+#[derive(Debug)]
+pub struct Vec3View<'a, T> {
+    pub x: View<'a, T>,
+    pub y: View<'a, T>,
+    pub z: View<'a, T>,
+}
+impl<T> Clone for Vec3View<'_, T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<T> Copy for Vec3View<'_, T> {}
+
+impl<'a, T: Copy> Vec3View<'a, T> {
+    #[inline(always)]
+    pub fn new(x: &'a [T], y: &'a [T], z: &'a [T]) -> Self {
+        Self { x: View::new(x), y: View::new(y), z: View::new(z) }
+    }
+    #[inline(always)]
+    pub fn at(&self, i: usize) -> [T; 3] {
+        [self.x.at(i), self.y.at(i), self.z.at(i)]
+    }
+}
+
+/// Mutable counterpart of [`Vec3View`].
+#[repr(C)]
+#[derive(Debug)]
+pub struct Vec3ViewMut<'a, T> {
+    pub x: ViewMut<'a, T>,
+    pub y: ViewMut<'a, T>,
+    pub z: ViewMut<'a, T>,
+}
+impl<T> Clone for Vec3ViewMut<'_, T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<T> Copy for Vec3ViewMut<'_, T> {}
+
+impl<'a, T: Copy> Vec3ViewMut<'a, T> {
+    #[inline(always)]
+    pub fn new(x: &'a mut [T], y: &'a mut [T], z: &'a mut [T]) -> Self {
+        Self { x: ViewMut::new(x), y: ViewMut::new(y), z: ViewMut::new(z) }
+    }
+    #[inline(always)]
+    pub fn at(&self, i: usize) -> [T; 3] {
+        [self.x.at(i), self.y.at(i), self.z.at(i)]
+    }
+    /// # Safety
+    /// As for [`ViewMut::write`].
+    #[inline(always)]
+    pub unsafe fn write(&self, i: usize, v: [T; 3]) {
+        self.x.write(i, v[0]);
+        self.y.write(i, v[1]);
+        self.z.write(i, v[2]);
+    }
+}
+
+/// Six arrays holding the independent components of a per-particle symmetric tensor.
+#[repr(C)]
+#[derive(Debug)]
+pub struct SymTensorView<'a, T> {
+    pub xx: View<'a, T>,
+    pub yy: View<'a, T>,
+    pub zz: View<'a, T>,
+    pub xy: View<'a, T>,
+    pub xz: View<'a, T>,
+    pub yz: View<'a, T>,
+}
+impl<T> Clone for SymTensorView<'_, T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<T> Copy for SymTensorView<'_, T> {}
+
+/// Mutable counterpart of [`SymTensorView`].
+#[repr(C)]
+#[derive(Debug)]
+pub struct SymTensorViewMut<'a, T> {
+    pub xx: ViewMut<'a, T>,
+    pub yy: ViewMut<'a, T>,
+    pub zz: ViewMut<'a, T>,
+    pub xy: ViewMut<'a, T>,
+    pub xz: ViewMut<'a, T>,
+    pub yz: ViewMut<'a, T>,
+}
+impl<T> Clone for SymTensorViewMut<'_, T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<T> Copy for SymTensorViewMut<'_, T> {}
