@@ -1,1 +1,13 @@
 pub use coil_kernels as kernels;
+pub mod scene;
+pub mod setup;
+pub mod neighbor_grid;
+pub mod parallel;
+pub mod particles;
+pub mod model;
+pub mod inlet;
+pub mod time_step;
+pub mod simulation;
+pub mod output;
+pub mod frame;
+pub mod run;

@@ -14,10 +14,10 @@ pub fn density<R: Real>(i: usize, neighborhood: &Neighborhood, fluid: &Fluid<R>)
     sum * fluid.mass
 }
 
-/// Equation of state, Eq. (6): p = c^2 (rho - rho0) (Pa).
+/// Equation of state, Eq. (6): p = c^2 (rho - rho0) (Pa), floored at `fluid.pressure_floor`.
 #[inline(always)]
 pub fn pressure<R: Real>(density: R, fluid: &Fluid<R>) -> R {
-    fluid.sound_speed2 * (density - fluid.rest_density)
+    (fluid.sound_speed2 * (density - fluid.rest_density)).max(fluid.pressure_floor)
 }
 
 /// Arguments of the density pass.

@@ -14,6 +14,10 @@ pub struct Fluid<R> {
     pub rest_density: R,
     /// Squared speed of sound c^2 (m^2/s^2), Eq. (6).
     pub sound_speed2: R,
+    /// Lowest pressure the equation of state returns (Pa): minus infinity keeps Eq. (6) as
+    /// printed; 0 removes the tension that the density deficit of free-surface particles
+    /// otherwise creates (c^2 times about 20 % of rho0), which grows with c^2.
+    pub pressure_floor: R,
     /// Gravity g (m/s^2).
     pub gravity: Vec3<R>,
     pub kernels: SmoothingKernels<R>,

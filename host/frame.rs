@@ -1,0 +1,82 @@
+//! Per-particle output fields of the fluid, gathered from a run into reusable buffers.
+
+use crate::model::Model;
+use crate::output::vtu::{encode, Field};
+use crate::particles::vec3_view;
+use crate::simulation::Simulation;
+use coil_kernels::density::pressure;
+use coil_kernels::velocity_gradient::{rate_of_deformation, shear_rate, velocity_gradient};
+use coil_kernels::view::View;
+use coil_kernels::Real;
+use rayon::prelude::*;
+
+/// The fluid particles of one frame. Buffers keep their capacity from frame to frame.
+#[derive(Default)]
+pub struct Frame {
+    pub position: Vec<[f64; 3]>,
+    pub velocity: Vec<[f32; 3]>,
+    /// kg/m^3
+    pub density: Vec<f32>,
+    /// Pa, Eq. (6)
+    pub pressure: Vec<f32>,
+    /// Kinematic viscosity nu (m^2/s), Eq. (3)
+    pub viscosity: Vec<f32>,
+    /// Shear rate D (1/s), Eq. (2)
+    pub shear_rate: Vec<f32>,
+    pub id: Vec<u32>,
+    all_shear_rate: Vec<f32>,
+    bytes: Vec<u8>,
+}
+
+impl Frame {
+    /// Reads the fluid particles of `sim`, computing shear rate (Eq. 8, 2) and viscosity
+    /// (Eq. 3) with the kernels' own functions.
+    pub fn capture<R: Real, M: Model<R>>(&mut self, sim: &Simulation<R, M>) {
+        let p = &sim.particles;
+        let n = p.len();
+        let fluid = sim.fluid;
+        let neighborhood = sim.neighborhood();
+        let velocity = vec3_view(&p.velocity, n);
+        let density = View::new(&p.density[..n]);
+        self.all_shear_rate.resize(n, 0.0);
+        self.all_shear_rate.par_iter_mut().enumerate().with_min_len(256).for_each(|(i, out)| {
+            let grad = velocity_gradient(i, &neighborhood, &velocity, &density, &fluid);
+            *out = shear_rate(rate_of_deformation(grad)).to_f64() as f32;
+        });
+        self.position.clear();
+        self.velocity.clear();
+        self.density.clear();
+        self.pressure.clear();
+        self.viscosity.clear();
+        self.shear_rate.clear();
+        self.id.clear();
+        for i in 0..n {
+            if fluid.is_boundary(p.id[i]) {
+                continue;
+            }
+            let rho = p.density[i];
+            let d = self.all_shear_rate[i];
+            self.position.push([0, 1, 2].map(|a| p.position[a][i]));
+            self.velocity.push([0, 1, 2].map(|a| p.velocity[a][i].to_f64() as f32));
+            self.density.push(rho.to_f64() as f32);
+            self.pressure.push(pressure(rho, &fluid).to_f64() as f32);
+            self.viscosity.push(sim.model.viscosity(R::from_f64(d as f64)).to_f64() as f32);
+            self.shear_rate.push(d);
+            self.id.push(p.id[i]);
+        }
+    }
+
+    /// The frame as a `.vtu` file's bytes.
+    pub fn to_vtu(&mut self) -> &[u8] {
+        let fields = [
+            Field::Vector("velocity", &self.velocity),
+            Field::Scalar("density", &self.density),
+            Field::Scalar("pressure", &self.pressure),
+            Field::Scalar("viscosity", &self.viscosity),
+            Field::Scalar("shear_rate", &self.shear_rate),
+            Field::Id("id", &self.id),
+        ];
+        encode(&self.position, &fields, &mut self.bytes);
+        &self.bytes
+    }
+}

@@ -1,0 +1,104 @@
+//! Drives the neighbor grid on the CPU: hashing, the counting sort and the reorder of every
+//! particle field (Algorithm 1, line 3). Also drops particles that left the domain box.
+
+use crate::parallel::launch;
+use crate::particles::{view_mut, Particles};
+use coil_kernels::cell_grid::{hash_pass, CellGrid, HashArgs, Neighborhood};
+use coil_kernels::counting_sort::{chunk_total, count_particle, gather, scan_chunk, scatter, sort_bucket, Counters};
+use coil_kernels::view::{Vec3View, View, ViewMut};
+use coil_kernels::Real;
+use std::sync::atomic::{AtomicU32, Ordering};
+
+/// Buckets per scan chunk.
+const SCAN_CHUNK: usize = 4096;
+
+pub struct NeighborGrid {
+    pub grid: CellGrid,
+    cell_key: Vec<u32>,
+    counters: Vec<AtomicU32>,
+    cell_start: Vec<u32>,
+    order: Vec<u32>,
+    chunk_offsets: Vec<u32>,
+}
+
+impl NeighborGrid {
+    /// A grid of cells of edge `cell_size` (m, the support radius) over the domain box.
+    pub fn new(min: [f64; 3], max: [f64; 3], cell_size: f64, capacity: usize) -> Self {
+        let dims = [0, 1, 2].map(|a| (((max[a] - min[a]) / cell_size).ceil() as u32).max(1));
+        let grid = CellGrid { origin: min, inverse_cell_size: 1.0 / cell_size, dims };
+        let buckets = grid.cell_count() as usize + 1;
+        Self {
+            grid,
+            cell_key: vec![0; capacity],
+            counters: (0..buckets).map(|_| AtomicU32::new(0)).collect(),
+            cell_start: vec![0; buckets + 1],
+            order: vec![0; capacity],
+            chunk_offsets: vec![0; buckets.div_ceil(SCAN_CHUNK)],
+        }
+    }
+
+    /// Bytes of the grid's own arrays.
+    pub fn bytes(&self) -> usize {
+        4 * (self.cell_key.len() + self.counters.len() + self.cell_start.len() + self.order.len())
+    }
+
+    /// Sorts the particles by cell, dropping those outside the domain; returns how many left.
+    pub fn sort<R: Real>(&mut self, p: &mut Particles<R>) -> usize {
+        let n = p.len();
+        let grid = self.grid;
+        let args = HashArgs { grid, position: p.position_view(), cell_key: view_mut(&mut self.cell_key, n) };
+        launch(n, |i| hash_pass(i, &args));
+
+        let counters = Counters::new(&self.counters);
+        let buckets = self.counters.len();
+        launch(buckets, |k| self.counters[k].store(0, Ordering::Relaxed));
+        let keys = View::new(&self.cell_key[..n]);
+        launch(n, |i| count_particle(i, keys, counters));
+
+        // Exclusive scan: chunk totals in parallel, their offsets serially, then each chunk.
+        let chunks = self.chunk_offsets.len();
+        let totals = view_mut(&mut self.chunk_offsets, chunks);
+        launch(chunks, |c| unsafe { totals.write(c, chunk_total(c, SCAN_CHUNK, counters)) });
+        let mut running = 0u32;
+        for t in self.chunk_offsets.iter_mut() {
+            let total = *t;
+            *t = running;
+            running += total;
+        }
+        let offsets = View::new(&self.chunk_offsets);
+        let starts = ViewMut::new(&mut self.cell_start);
+        launch(chunks, |c| scan_chunk(c, SCAN_CHUNK, offsets.at(c), counters, starts));
+
+        let order = view_mut(&mut self.order, n);
+        launch(n, |i| scatter(i, keys, counters, order));
+        let starts = View::new(&self.cell_start);
+        launch(grid.cell_count() as usize, |c| sort_bucket(c, starts, order));
+
+        let live = self.cell_start[grid.cell_count() as usize] as usize;
+        reorder(p, View::new(&self.order[..live]), live);
+        n - live
+    }
+
+    /// The sorted grid for the particles' current order.
+    pub fn neighborhood<'a>(&'a self, position: Vec3View<'a, f64>) -> Neighborhood<'a> {
+        Neighborhood { grid: self.grid, cell_start: View::new(&self.cell_start), position }
+    }
+}
+
+/// Permutes every field that carries state from step to step (positions, both velocities,
+/// ids) into sorted order; fields recomputed each step are left alone.
+fn reorder<R: Real>(p: &mut Particles<R>, order: View<u32>, live: usize) {
+    fn permute<T: Copy + Send + Sync>(field: &mut Vec<T>, scratch: &mut Vec<T>, order: View<u32>, live: usize) {
+        let unsorted = View::new(&field[..]);
+        let sorted = view_mut(scratch, live);
+        launch(live, |k| gather(k, order, unsorted, sorted));
+        std::mem::swap(field, scratch);
+    }
+    for a in 0..3 {
+        permute(&mut p.position[a], &mut p.scratch_f64, order, live);
+        permute(&mut p.velocity[a], &mut p.scratch_real, order, live);
+        permute(&mut p.velocity_half[a], &mut p.scratch_real, order, live);
+    }
+    permute(&mut p.id, &mut p.scratch_u32, order, live);
+    p.set_len(live);
+}

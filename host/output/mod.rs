@@ -1,0 +1,16 @@
+//! Frames: one VTK XML `.vtu` per frame plus a `.pvd` series that ParaView opens.
+
+pub mod vtu;
+
+use std::io;
+use std::path::{Path, PathBuf};
+
+/// Writes `bytes` to `path` through a temporary name and a rename, so a killed run never
+/// leaves a torn file.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".tmp");
+    let tmp = PathBuf::from(tmp);
+    std::fs::write(&tmp, bytes)?;
+    std::fs::rename(&tmp, path)
+}

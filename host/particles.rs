@@ -1,0 +1,120 @@
+//! Structure-of-arrays particle storage, allocated once to the run's capacity.
+
+use coil_kernels::view::{Vec3View, Vec3ViewMut, View, ViewMut};
+use coil_kernels::Real;
+
+/// Every per-particle array of a run. Arrays hold `capacity` entries; the first `len` are live.
+/// Boundary particles come first by id (ids below `boundary_count`), but after the first sort
+/// they are interleaved with the fluid in cell order.
+pub struct Particles<R> {
+    len: usize,
+    capacity: usize,
+    /// Position (m), f64 in both precisions (see `leapfrog`).
+    pub position: [Vec<f64>; 3],
+    /// Velocity at the full step (m/s).
+    pub velocity: [Vec<R>; 3],
+    /// Velocity at the half step (m/s).
+    pub velocity_half: [Vec<R>; 3],
+    /// Stable particle identity, kept through sorting.
+    pub id: Vec<u32>,
+    /// Density (kg/m^3).
+    pub density: Vec<R>,
+    /// Acceleration (m/s^2).
+    pub acceleration: [Vec<R>; 3],
+    /// Shear stress tau (Pa): xx, yy, zz, xy, xz, yz. Allocated only for the paper's operator.
+    pub stress: Option<[Vec<R>; 6]>,
+    /// Targets of the reorder, swapped with the field they receive.
+    pub(crate) scratch_f64: Vec<f64>,
+    pub(crate) scratch_real: Vec<R>,
+    pub(crate) scratch_u32: Vec<u32>,
+}
+
+fn zeros<T: Clone + Default>(n: usize) -> Vec<T> {
+    vec![T::default(); n]
+}
+
+impl<R: Real> Particles<R> {
+    pub fn with_capacity(capacity: usize, with_stress: bool) -> Self {
+        Self {
+            len: 0,
+            capacity,
+            position: [zeros(capacity), zeros(capacity), zeros(capacity)],
+            velocity: [zeros(capacity), zeros(capacity), zeros(capacity)],
+            velocity_half: [zeros(capacity), zeros(capacity), zeros(capacity)],
+            id: zeros(capacity),
+            density: zeros(capacity),
+            acceleration: [zeros(capacity), zeros(capacity), zeros(capacity)],
+            stress: with_stress.then(|| core::array::from_fn(|_| zeros(capacity))),
+            scratch_f64: zeros(capacity),
+            scratch_real: zeros(capacity),
+            scratch_u32: zeros(capacity),
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    pub fn capacity(&self) -> usize {
+        self.capacity
+    }
+
+    pub(crate) fn set_len(&mut self, len: usize) {
+        assert!(len <= self.capacity);
+        self.len = len;
+    }
+
+    /// Appends a particle at rest density. The caller keeps within capacity (budgets are
+    /// checked before injection).
+    pub fn push(&mut self, id: u32, position: [f64; 3], velocity: [f64; 3]) {
+        assert!(self.len < self.capacity, "particle capacity {} exceeded", self.capacity);
+        let i = self.len;
+        for a in 0..3 {
+            self.position[a][i] = position[a];
+            self.velocity[a][i] = R::from_f64(velocity[a]);
+            self.velocity_half[a][i] = R::from_f64(velocity[a]);
+            self.acceleration[a][i] = R::ZERO;
+        }
+        self.id[i] = id;
+        self.len += 1;
+    }
+
+    /// Bytes allocated per particle of capacity.
+    pub fn bytes_per_particle(&self) -> usize {
+        let r = std::mem::size_of::<R>();
+        3 * 8 + 3 * r * 3 + 4 + r + if self.stress.is_some() { 6 * r } else { 0 } + 8 + r + 4
+    }
+
+    pub fn position_view(&self) -> Vec3View<'_, f64> {
+        vec3_view(&self.position, self.len)
+    }
+
+    pub fn velocity_view(&self) -> Vec3View<'_, R> {
+        vec3_view(&self.velocity, self.len)
+    }
+
+    pub fn density_view(&self) -> View<'_, R> {
+        View::new(&self.density[..self.len])
+    }
+
+    pub fn id_view(&self) -> View<'_, u32> {
+        View::new(&self.id[..self.len])
+    }
+}
+
+pub fn vec3_view<T: Copy>(a: &[Vec<T>; 3], len: usize) -> Vec3View<'_, T> {
+    Vec3View::new(&a[0][..len], &a[1][..len], &a[2][..len])
+}
+
+pub fn vec3_view_mut<T: Copy>(a: &mut [Vec<T>; 3], len: usize) -> Vec3ViewMut<'_, T> {
+    let [x, y, z] = a;
+    Vec3ViewMut::new(&mut x[..len], &mut y[..len], &mut z[..len])
+}
+
+pub fn view_mut<T: Copy>(a: &mut [T], len: usize) -> ViewMut<'_, T> {
+    ViewMut::new(&mut a[..len])
+}

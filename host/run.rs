@@ -1,0 +1,193 @@
+//! `coil run`: a scene on the CPU from t = 0 to its end time, writing frames as it goes.
+
+use crate::frame::Frame;
+use crate::model::{LaplacianModel, Model, StressModel};
+use crate::output::vtu::{encode, Field, Series};
+use crate::output::write_atomically;
+use crate::scene::{Precision, Scene, SceneError, ViscosityOperator};
+use crate::setup::{initial_particles, InitialParticles};
+use crate::simulation::{Instability, Simulation};
+use coil_kernels::cross_viscosity::{Cross, Newtonian};
+use coil_kernels::Real;
+use std::fmt;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// Folder for frames; created if missing.
+    pub out_dir: PathBuf,
+    /// Overrides the scene's precision.
+    pub precision: Option<Precision>,
+    /// No progress lines.
+    pub quiet: bool,
+}
+
+/// What a run did, printed at its end.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Summary {
+    pub steps: u64,
+    pub simulated_s: f64,
+    pub wall_s: f64,
+    pub particle_steps_per_s: f64,
+    pub fluid_particles: usize,
+    pub boundary_particles: usize,
+    pub max_density_error: f64,
+    pub max_speed_m_s: f64,
+    /// Largest speed over c.
+    pub max_mach: f64,
+    pub removed: u64,
+    pub frames: usize,
+}
+
+impl fmt::Display for Summary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "steps                  {}", self.steps)?;
+        writeln!(f, "simulated time         {:.6} s", self.simulated_s)?;
+        writeln!(f, "wall time              {:.2} s", self.wall_s)?;
+        writeln!(f, "particle-steps/s       {:.3e}", self.particle_steps_per_s)?;
+        writeln!(f, "particles              {} fluid, {} boundary", self.fluid_particles, self.boundary_particles)?;
+        writeln!(f, "max |rho-rho0|/rho0    {:.3e}", self.max_density_error)?;
+        writeln!(f, "max speed              {:.4} m/s (Mach {:.3})", self.max_speed_m_s, self.max_mach)?;
+        writeln!(f, "removed (left domain)  {}", self.removed)?;
+        write!(f, "frames                 {}", self.frames)
+    }
+}
+
+#[derive(Debug)]
+pub enum RunError {
+    /// Bad input (exit code 2).
+    Scene(SceneError),
+    /// Output could not be written.
+    Io(String),
+    /// The run went unstable; frames written before are kept.
+    Unstable(Instability, Summary),
+}
+
+impl fmt::Display for RunError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            RunError::Scene(e) => e.fmt(f),
+            RunError::Io(e) => f.write_str(e),
+            RunError::Unstable(i, s) => write!(f, "{i}\nFrames written before it are kept ({}).", s.frames),
+        }
+    }
+}
+
+/// Runs `scene` (read from `scene_file`) to its end time.
+pub fn run(scene: &Scene, scene_file: &str, options: &RunOptions) -> Result<Summary, RunError> {
+    let initial = initial_particles(scene, scene_file).map_err(RunError::Scene)?;
+    std::fs::create_dir_all(&options.out_dir).map_err(|e| {
+        RunError::Scene(SceneError {
+            file: scene_file.into(),
+            field: "--out".into(),
+            reason: format!("output folder {} cannot be created: {e}", options.out_dir.display()),
+        })
+    })?;
+    let precision = options.precision.unwrap_or(scene.simulation.precision);
+    match precision {
+        Precision::F32 => dispatch::<f32>(scene, &initial, options),
+        Precision::F64 => dispatch::<f64>(scene, &initial, options),
+    }
+}
+
+/// Picks the physics variant once; everything after runs monomorphised for it.
+fn dispatch<R: Real>(scene: &Scene, initial: &InitialParticles, options: &RunOptions) -> Result<Summary, RunError> {
+    let v = &scene.material.viscosity;
+    let nu0 = R::from_f64(v.nu0_m2_s);
+    match (v.operator, v.is_newtonian()) {
+        (ViscosityOperator::Laplacian, _) => drive(scene, initial, LaplacianModel(Newtonian { nu0 }), options),
+        (ViscosityOperator::Stress, true) => drive(scene, initial, StressModel(Newtonian { nu0 }), options),
+        (ViscosityOperator::Stress, false) => {
+            let cross = Cross { nu0, nu_inf: R::from_f64(v.nu_inf()), k: R::from_f64(v.cross_k_s), n: R::from_f64(v.cross_n) };
+            drive(scene, initial, StressModel(cross), options)
+        }
+    }
+}
+
+fn io_error(what: &str, path: &std::path::Path, e: std::io::Error) -> RunError {
+    RunError::Io(format!("cannot write {what} {}: {e}", path.display()))
+}
+
+fn drive<R: Real, M: Model<R>>(scene: &Scene, initial: &InitialParticles, model: M, options: &RunOptions) -> Result<Summary, RunError> {
+    let mut sim = Simulation::<R, M>::new(scene, initial, model);
+    let dir = &options.out_dir;
+
+    let mut bytes = Vec::new();
+    let boundary_path = dir.join("boundary.vtu");
+    encode(&initial.boundary, &[] as &[Field], &mut bytes);
+    write_atomically(&boundary_path, &bytes).map_err(|e| io_error("boundary", &boundary_path, e))?;
+
+    let end = scene.simulation.end_time_s;
+    let every_s = scene.output.every_s;
+    let every_steps = scene.output.every_steps;
+    let expected_frames = every_s.map(|e| (end / e).ceil() as usize + 1).unwrap_or(1024);
+    let mut series = Series::new(dir.join(format!("{}.pvd", scene.name)), expected_frames);
+    let mut frame = Frame::default();
+    let mut frames = 0usize;
+    let mut write_frame = |sim: &Simulation<R, M>, frames: &mut usize| -> Result<(), RunError> {
+        frame.capture(sim);
+        let name = format!("frame_{:06}.vtu", *frames);
+        let path = dir.join(&name);
+        write_atomically(&path, frame.to_vtu()).map_err(|e| io_error("frame", &path, e))?;
+        series.push(sim.time, &name).map_err(|e| io_error("series", series.path(), e))?;
+        *frames += 1;
+        Ok(())
+    };
+    write_frame(&sim, &mut frames)?;
+
+    let started = Instant::now();
+    let mut last_report = started;
+    let mut particle_steps = 0f64;
+    let mut max_density_error = 0f64;
+    let mut max_speed = 0f64;
+    let mut next_frame_time = every_s.unwrap_or(f64::INFINITY);
+    let summary = |sim: &Simulation<R, M>, frames: usize, particle_steps: f64, max_density_error: f64, max_speed: f64| {
+        let wall = started.elapsed().as_secs_f64();
+        Summary {
+            steps: sim.steps,
+            simulated_s: sim.time,
+            wall_s: wall,
+            particle_steps_per_s: if wall > 0.0 { particle_steps / wall } else { 0.0 },
+            fluid_particles: sim.fluid_count(),
+            boundary_particles: sim.boundary_count(),
+            max_density_error,
+            max_speed_m_s: max_speed,
+            max_mach: max_speed / scene.material.sound_speed_m_s,
+            removed: sim.removed,
+            frames,
+        }
+    };
+    while sim.time < end * (1.0 - 1e-12) {
+        let (dt, limit) = sim.next_dt();
+        let dt = dt.min(end - sim.time);
+        if let Err(instability) = sim.step_with(dt, limit) {
+            let s = summary(&sim, frames, particle_steps, max_density_error, max_speed);
+            return Err(RunError::Unstable(instability, s));
+        }
+        particle_steps += sim.particles.len() as f64;
+        max_density_error = max_density_error.max(sim.diagnostics.max_density_error);
+        max_speed = max_speed.max(sim.diagnostics.max_speed);
+        let due = match every_steps {
+            Some(k) => sim.steps % k == 0,
+            None => sim.time >= next_frame_time * (1.0 - 1e-9),
+        };
+        if due {
+            write_frame(&sim, &mut frames)?;
+            while next_frame_time <= sim.time * (1.0 + 1e-9) {
+                next_frame_time += every_s.unwrap_or(f64::INFINITY);
+            }
+        }
+        if !options.quiet && last_report.elapsed() >= Duration::from_secs(2) {
+            last_report = Instant::now();
+            let wall = started.elapsed().as_secs_f64();
+            let rate = sim.steps as f64 / wall;
+            let eta = (end - sim.time) / sim.time * wall;
+            eprintln!(
+                "t = {:.5} / {end} s  step {}  dt {:.2e} s ({})  {} fluid particles  {rate:.1} steps/s  ETA {eta:.0} s",
+                sim.time, sim.steps, sim.last_dt, sim.last_limit, sim.fluid_count()
+            );
+        }
+    }
+    Ok(summary(&sim, frames, particle_steps, max_density_error, max_speed))
+}

@@ -1,0 +1,427 @@
+//! Scene files: TOML, SI units, every unit in the field name. Parsed with serde
+//! (`deny_unknown_fields`), validated once at load, then turned into plain `Copy` parameter
+//! structs for the kernels.
+
+use serde::Deserialize;
+use std::fmt;
+use std::path::Path;
+
+/// A user mistake in a scene: which file, which field, why. The CLI prints it and exits 2.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneError {
+    pub file: String,
+    pub field: String,
+    pub reason: String,
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}: {}", self.file, self.field, self.reason)
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Short name, used for the output folder.
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    /// Which experiment of the paper this reproduces, and for jets their Reynolds number and H/D.
+    #[serde(default)]
+    pub notes: String,
+    pub material: Material,
+    pub domain: Domain,
+    pub simulation: Simulation,
+    #[serde(default)]
+    pub output: Output,
+    #[serde(default, rename = "fluid_block")]
+    pub fluid_blocks: Vec<FluidBlock>,
+    #[serde(default, rename = "boundary")]
+    pub boundaries: Vec<Boundary>,
+    #[serde(default, rename = "inlet")]
+    pub inlets: Vec<Inlet>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    /// rho0 (kg/m^3), Eq. (6).
+    #[serde(default = "default_rest_density")]
+    pub rest_density_kg_m3: f64,
+    /// c (m/s), Eq. (6). The paper's sqrt(1.5) suits animation; quantitative work needs c well
+    /// above the flow speed.
+    #[serde(default = "default_sound_speed")]
+    pub sound_speed_m_s: f64,
+    /// Clamp negative pressure to zero. Eq. (6) as printed lets free-surface particles, whose
+    /// density sum lacks neighbors, pull on the fluid with a tension of c^2 times their density
+    /// deficit: negligible at the paper's c, violent when c is raised for accuracy.
+    #[serde(default)]
+    pub clamp_negative_pressure: bool,
+    /// Initial particle spacing (m).
+    pub particle_spacing_m: f64,
+    /// Support radius h as a multiple of the spacing (2 gives about 33 neighbors).
+    #[serde(default = "default_support_factor")]
+    pub support_radius_factor: f64,
+    /// g (m/s^2). Plates and box floors are horizontal in y, so gravity usually points along -y.
+    #[serde(default = "default_gravity")]
+    pub gravity_m_s2: [f64; 3],
+    pub viscosity: Viscosity,
+}
+
+fn default_rest_density() -> f64 {
+    1000.0
+}
+fn default_sound_speed() -> f64 {
+    1.5f64.sqrt()
+}
+fn default_support_factor() -> f64 {
+    2.0
+}
+fn default_gravity() -> [f64; 3] {
+    [0.0, -9.8, 0.0]
+}
+
+/// Which discretisation of the viscous term.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ViscosityOperator {
+    /// The paper's: velocity gradient, Eq. (8), stress, Eq. (2), divergence, Eq. (9).
+    #[default]
+    Stress,
+    /// Müller et al. 2003: nu0 times the viscosity-kernel Laplacian of velocity (Newtonian).
+    Laplacian,
+}
+
+/// Kinematic viscosities (m^2/s) and the Cross model, Eq. (3).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Viscosity {
+    #[serde(default)]
+    pub operator: ViscosityOperator,
+    /// Zero-shear kinematic viscosity nu0 (m^2/s).
+    pub nu0_m2_s: f64,
+    /// Infinite-shear kinematic viscosity nu_inf (m^2/s); defaults to nu0.
+    pub nu_inf_m2_s: Option<f64>,
+    /// Cross consistency K (s); 0 makes the fluid Newtonian with nu0.
+    #[serde(default)]
+    pub cross_k_s: f64,
+    /// Cross rate index n (dimensionless).
+    #[serde(default = "one")]
+    pub cross_n: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl Viscosity {
+    pub fn nu_inf(&self) -> f64 {
+        self.nu_inf_m2_s.unwrap_or(self.nu0_m2_s)
+    }
+    /// K = 0 (or nu_inf = nu0) is a Newtonian fluid: the Cross model is never evaluated.
+    pub fn is_newtonian(&self) -> bool {
+        self.cross_k_s == 0.0 || self.nu_inf() == self.nu0_m2_s
+    }
+}
+
+/// The box that holds every particle (m); particles that leave it are removed and counted.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Domain {
+    pub min_m: [f64; 3],
+    pub max_m: [f64; 3],
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Precision {
+    #[default]
+    F32,
+    F64,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Simulation {
+    /// Simulated time to run (s).
+    pub end_time_s: f64,
+    #[serde(default)]
+    pub precision: Precision,
+    /// Capacity for fluid particles, the initial fluid plus all an inlet may inject (the paper's
+    /// "maximum number of particles"). Defaults to the initial fluid.
+    pub max_fluid_particles: Option<usize>,
+    #[serde(default)]
+    pub time_step: TimeStep,
+}
+
+/// dt: automatic from Eq. (10) and the velocity CFL, or fixed.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TimeStep {
+    /// Multiplies the automatic dt (0 < factor <= 1).
+    #[serde(default = "one")]
+    pub safety_factor: f64,
+    /// A fixed dt (s) instead of the automatic one.
+    pub fixed_s: Option<f64>,
+    /// Accept a fixed dt above the Eq. (10) bound (the run may blow up; the guard stops it).
+    #[serde(default)]
+    pub allow_above_stability_bound: bool,
+}
+
+impl Default for TimeStep {
+    fn default() -> Self {
+        Self { safety_factor: 1.0, fixed_s: None, allow_above_stability_bound: false }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Output {
+    /// Write a frame every this many simulated seconds.
+    pub every_s: Option<f64>,
+    /// Or every this many steps.
+    pub every_steps: Option<u64>,
+}
+
+impl Default for Output {
+    fn default() -> Self {
+        Self { every_s: Some(0.01), every_steps: None }
+    }
+}
+
+/// A block of fluid on the particle lattice, at rest unless given a velocity.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FluidBlock {
+    pub min_m: [f64; 3],
+    pub max_m: [f64; 3],
+    #[serde(default)]
+    pub velocity_m_s: [f64; 3],
+}
+
+/// Walls of fixed virtual particles (paper Sec. III-B), in layers that cover the support.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, tag = "shape", rename_all = "snake_case")]
+pub enum Boundary {
+    /// Walls around the interior `min_m`..`max_m`; `open_top` leaves out the lid (max y).
+    Box {
+        min_m: [f64; 3],
+        max_m: [f64; 3],
+        #[serde(default)]
+        open_top: bool,
+    },
+    /// A horizontal plate whose top surface is at `height_m` (y), spanning x and z between
+    /// `min_xz_m` and `max_xz_m` (default: the whole domain, a plane).
+    Plate {
+        height_m: f64,
+        min_xz_m: Option<[f64; 2]>,
+        max_xz_m: Option<[f64; 2]>,
+    },
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, tag = "shape", rename_all = "snake_case")]
+pub enum Nozzle {
+    Circle { radius_m: f64 },
+    /// `width_m` along the first in-plane axis, `depth_m` along the second (see `inlet`).
+    Rectangle { width_m: f64, depth_m: f64 },
+}
+
+/// A jet inlet (paper Sec. III-C): layers of particles are injected each time the previous
+/// layer has moved one layer spacing away, until the particle budget is reached.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Inlet {
+    pub nozzle: Nozzle,
+    /// Nozzle centre at t = 0 (m).
+    pub position_m: [f64; 3],
+    /// Direction of the jet (normalised at load).
+    pub direction: [f64; 3],
+    /// Jet speed (m/s).
+    pub speed_m_s: f64,
+    /// Injection starts at this time (s).
+    #[serde(default)]
+    pub start_s: f64,
+    /// Injection stops at this time (s).
+    pub stop_s: Option<f64>,
+    /// How the nozzle moves (stitching patterns, Fig. 9).
+    pub motion: Option<NozzleMotion>,
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, untagged)]
+pub enum NozzleMotion {
+    /// Constant velocity (m/s).
+    Velocity { velocity_m_s: [f64; 3] },
+    /// Piecewise-linear path through `[t_s, x_m, y_m, z_m]` waypoints, held at the ends.
+    Waypoints { waypoints: Vec<[f64; 4]> },
+}
+
+impl Scene {
+    /// Reads and validates a scene file.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+            file: file.clone(),
+            field: "(file)".into(),
+            reason: format!("cannot be read: {e}"),
+        })?;
+        Self::parse(&text, &file)
+    }
+
+    /// Parses and validates scene text; `file` names it in errors.
+    pub fn parse(text: &str, file: &str) -> Result<Scene, SceneError> {
+        let scene: Scene = toml::from_str(text).map_err(|e| SceneError {
+            file: file.into(),
+            field: "(syntax)".into(),
+            reason: e.message().to_string()
+                + &e.span().map(|s| format!(" (at line {})", 1 + text[..s.start].matches('\n').count())).unwrap_or_default(),
+        })?;
+        scene.validate(file)?;
+        Ok(scene)
+    }
+
+    /// Support radius h (m).
+    pub fn support_radius(&self) -> f64 {
+        self.material.particle_spacing_m * self.material.support_radius_factor
+    }
+
+    fn validate(&self, file: &str) -> Result<(), SceneError> {
+        let err = |field: &str, reason: String| Err(SceneError { file: file.into(), field: field.into(), reason });
+        let positive = |field: &str, v: f64| -> Result<(), SceneError> {
+            if v > 0.0 && v.is_finite() {
+                Ok(())
+            } else {
+                err(field, format!("must be a positive number, got {v}"))
+            }
+        };
+        let m = &self.material;
+        positive("material.rest_density_kg_m3", m.rest_density_kg_m3)?;
+        positive("material.sound_speed_m_s", m.sound_speed_m_s)?;
+        positive("material.particle_spacing_m", m.particle_spacing_m)?;
+        if !(m.support_radius_factor >= 1.0 && m.support_radius_factor <= 4.0) {
+            return err(
+                "material.support_radius_factor",
+                format!("must be between 1 and 4 (2 gives about 33 neighbors), got {}", m.support_radius_factor),
+            );
+        }
+        if m.gravity_m_s2.iter().any(|g| !g.is_finite()) {
+            return err("material.gravity_m_s2", "must be finite".into());
+        }
+        let v = &m.viscosity;
+        positive("material.viscosity.nu0_m2_s", v.nu0_m2_s)?;
+        positive("material.viscosity.nu_inf_m2_s", v.nu_inf())?;
+        if v.nu_inf() > v.nu0_m2_s {
+            return err(
+                "material.viscosity.nu_inf_m2_s",
+                format!("must not exceed nu0_m2_s ({}): the Cross model is shear-thinning, got {}", v.nu0_m2_s, v.nu_inf()),
+            );
+        }
+        if !(v.cross_k_s >= 0.0 && v.cross_k_s.is_finite()) {
+            return err("material.viscosity.cross_k_s", format!("must be zero or positive, got {}", v.cross_k_s));
+        }
+        positive("material.viscosity.cross_n", v.cross_n)?;
+        if v.operator == ViscosityOperator::Laplacian && !v.is_newtonian() {
+            return err(
+                "material.viscosity.operator",
+                "the Laplacian operator is Newtonian (nu0 only); set cross_k_s = 0 or use operator = \"stress\"".into(),
+            );
+        }
+
+        let d = &self.domain;
+        for a in 0..3 {
+            if !(d.min_m[a] < d.max_m[a]) || !d.min_m[a].is_finite() || !d.max_m[a].is_finite() {
+                return err("domain.max_m", format!("must exceed domain.min_m on every axis (axis {a})"));
+            }
+        }
+        let cells: f64 = (0..3).map(|a| ((d.max_m[a] - d.min_m[a]) / self.support_radius()).ceil()).product();
+        if cells > 2.0e8 {
+            return err(
+                "domain",
+                format!("needs {cells:.3e} grid cells of edge h = {} m; shrink the domain or coarsen the spacing", self.support_radius()),
+            );
+        }
+        let inside = |p: [f64; 3]| (0..3).all(|a| p[a] >= d.min_m[a] && p[a] <= d.max_m[a]);
+
+        let s = &self.simulation;
+        positive("simulation.end_time_s", s.end_time_s)?;
+        let ts = &s.time_step;
+        if !(ts.safety_factor > 0.0 && ts.safety_factor <= 1.0) {
+            return err("simulation.time_step.safety_factor", format!("must be in (0, 1], got {}", ts.safety_factor));
+        }
+        if let Some(dt) = ts.fixed_s {
+            positive("simulation.time_step.fixed_s", dt)?;
+            let bound = crate::time_step::StabilityBound::new(self.support_radius(), m.sound_speed_m_s, v.nu0_m2_s);
+            let (limit_dt, limit) = bound.dt();
+            if dt > limit_dt && !ts.allow_above_stability_bound {
+                return err(
+                    "simulation.time_step.fixed_s",
+                    format!(
+                        "{dt:e} s is above the stability bound of Eq. (10), {limit_dt:.3e} s (set by the {limit}); \
+                         explicit leap-frog blows up above it. Lower it, remove it for the automatic step, or set \
+                         simulation.time_step.allow_above_stability_bound = true to run anyway"
+                    ),
+                );
+            }
+        }
+        if let Some(e) = self.output.every_s {
+            positive("output.every_s", e)?;
+        }
+        if self.output.every_steps == Some(0) {
+            return err("output.every_steps", "must be at least 1".into());
+        }
+
+        for (k, b) in self.fluid_blocks.iter().enumerate() {
+            for a in 0..3 {
+                if !(b.min_m[a] < b.max_m[a]) {
+                    return err(&format!("fluid_block[{k}].max_m"), format!("must exceed min_m on every axis (axis {a})"));
+                }
+            }
+            if !inside(b.min_m) || !inside(b.max_m) {
+                return err(&format!("fluid_block[{k}]"), "lies outside the domain box".into());
+            }
+        }
+        for (k, b) in self.boundaries.iter().enumerate() {
+            if let Boundary::Box { min_m, max_m, .. } = b {
+                for a in 0..3 {
+                    if !(min_m[a] < max_m[a]) {
+                        return err(&format!("boundary[{k}].max_m"), format!("must exceed min_m on every axis (axis {a})"));
+                    }
+                }
+            }
+        }
+        for (k, inlet) in self.inlets.iter().enumerate() {
+            let field = |f: &str| format!("inlet[{k}].{f}");
+            positive(&field("speed_m_s"), inlet.speed_m_s)?;
+            match inlet.nozzle {
+                Nozzle::Circle { radius_m } => positive(&field("nozzle.radius_m"), radius_m)?,
+                Nozzle::Rectangle { width_m, depth_m } => {
+                    positive(&field("nozzle.width_m"), width_m)?;
+                    positive(&field("nozzle.depth_m"), depth_m)?;
+                }
+            }
+            let n2: f64 = inlet.direction.iter().map(|c| c * c).sum();
+            if !(n2 > 0.0 && n2.is_finite()) {
+                return err(&field("direction"), "must be a non-zero vector".into());
+            }
+            if !inside(inlet.position_m) {
+                return err(&field("position_m"), format!("{:?} lies outside the domain box", inlet.position_m));
+            }
+            if let Some(NozzleMotion::Waypoints { waypoints }) = &inlet.motion {
+                if waypoints.is_empty() {
+                    return err(&field("motion.waypoints"), "needs at least one [t_s, x_m, y_m, z_m] point".into());
+                }
+                if waypoints.windows(2).any(|w| !(w[1][0] > w[0][0])) {
+                    return err(&field("motion.waypoints"), "times must increase".into());
+                }
+                if let Some(w) = waypoints.iter().find(|w| !inside([w[1], w[2], w[3]])) {
+                    return err(&field("motion.waypoints"), format!("{w:?} lies outside the domain box"));
+                }
+            }
+        }
+        Ok(())
+    }
+}

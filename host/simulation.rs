@@ -1,0 +1,283 @@
+//! One run: the particle state, the neighbor grid and the physics variant, advanced step by
+//! step through Algorithm 1 on the CPU.
+
+use crate::inlet::Inlet;
+use crate::model::Model;
+use crate::neighbor_grid::NeighborGrid;
+use crate::parallel::launch;
+use crate::particles::{vec3_view, vec3_view_mut, view_mut, Particles};
+use crate::scene::Scene;
+use crate::setup::{calibrated_mass, InitialParticles};
+use crate::time_step::{Limit, StabilityBound, TimeStepper};
+use coil_kernels::density::{density_pass, DensityArgs};
+use coil_kernels::fluid::Fluid;
+use coil_kernels::leapfrog::{leapfrog_pass, LeapfrogArgs};
+use coil_kernels::smoothing::SmoothingKernels;
+use coil_kernels::view::View;
+use coil_kernels::{Real, Vec3};
+use rayon::prelude::*;
+use std::fmt;
+
+/// Why a run stopped early.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Instability {
+    pub step: u64,
+    pub time_s: f64,
+    /// Fluid particles with a non-finite velocity or a speed above the runaway limit.
+    pub bad_particles: usize,
+    pub max_speed_m_s: f64,
+    pub runaway_speed_m_s: f64,
+    pub dt_s: f64,
+    pub stability_bound_s: f64,
+}
+
+impl fmt::Display for Instability {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "the run went unstable at step {} (t = {:.6e} s): {} particle(s) with a non-finite velocity or a speed above {:.3} m/s (largest finite speed {:.3e} m/s). ",
+            self.step, self.time_s, self.bad_particles, self.runaway_speed_m_s, self.max_speed_m_s
+        )?;
+        if self.dt_s > self.stability_bound_s {
+            write!(
+                f,
+                "Likely cause: dt = {:.3e} s is above the Eq. (10) bound {:.3e} s; lower simulation.time_step.fixed_s or remove it.",
+                self.dt_s, self.stability_bound_s
+            )
+        } else {
+            write!(
+                f,
+                "dt = {:.3e} s was within the Eq. (10) bound {:.3e} s; likely causes: particles injected into or overlapping walls, a sound speed too low for the flow speed, or a viscosity near the limit of the time step; try a smaller simulation.time_step.safety_factor.",
+                self.dt_s, self.stability_bound_s
+            )
+        }
+    }
+}
+
+/// Figures of the state after a step, over fluid particles.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Diagnostics {
+    /// Largest speed (m/s).
+    pub max_speed: f64,
+    /// Largest |rho - rho0| / rho0.
+    pub max_density_error: f64,
+    /// Fluid particles with a non-finite velocity or a runaway speed.
+    pub bad_particles: usize,
+}
+
+pub struct Simulation<R: Real, M: Model<R>> {
+    pub particles: Particles<R>,
+    grid: NeighborGrid,
+    pub fluid: Fluid<R>,
+    pub model: M,
+    inlets: Vec<Inlet>,
+    pub stepper: TimeStepper,
+    /// Simulated time (s).
+    pub time: f64,
+    pub steps: u64,
+    previous_dt: Option<f64>,
+    /// Fluid particles removed for leaving the domain box.
+    pub removed: u64,
+    fluid_capacity: usize,
+    fluid_count: usize,
+    next_id: u32,
+    /// Largest fluid speed after the last step (m/s), which the velocity CFL reads.
+    pub diagnostics: Diagnostics,
+    /// A speed no particle can reach physically (m/s): twice the free fall across the domain
+    /// plus the fastest jet, plus c.
+    pub runaway_speed: f64,
+    pub last_dt: f64,
+    pub last_limit: Limit,
+}
+
+impl<R: Real, M: Model<R>> Simulation<R, M> {
+    /// Sets up a run of `scene` with the particles `initial`.
+    pub fn new(scene: &Scene, initial: &InitialParticles, model: M) -> Self {
+        let mat = &scene.material;
+        let h = scene.support_radius();
+        let s = mat.particle_spacing_m;
+        let mass = calibrated_mass(mat.rest_density_kg_m3, s, h);
+        let inlets: Vec<Inlet> =
+            scene.inlets.iter().map(|c| Inlet::new(c, s, mass, mat.rest_density_kg_m3)).collect();
+        let fluid_capacity = scene.simulation.max_fluid_particles.unwrap_or(0).max(initial.fluid.len());
+        let boundary_count = initial.boundary.len();
+        let mut particles = Particles::with_capacity(boundary_count + fluid_capacity, M::USES_STRESS);
+        for (k, &x) in initial.boundary.iter().enumerate() {
+            particles.push(k as u32, x, [0.0; 3]);
+        }
+        for (k, (&x, &v)) in initial.fluid.iter().zip(&initial.fluid_velocity).enumerate() {
+            particles.push((boundary_count + k) as u32, x, v);
+        }
+        let g = mat.gravity_m_s2;
+        let fluid = Fluid {
+            mass: R::from_f64(mass),
+            rest_density: R::from_f64(mat.rest_density_kg_m3),
+            sound_speed2: R::from_f64(mat.sound_speed_m_s * mat.sound_speed_m_s),
+            pressure_floor: R::from_f64(if mat.clamp_negative_pressure { 0.0 } else { f64::NEG_INFINITY }),
+            gravity: Vec3::new(R::from_f64(g[0]), R::from_f64(g[1]), R::from_f64(g[2])),
+            kernels: SmoothingKernels::new(h),
+            boundary_count: boundary_count as u32,
+        };
+        let ts = &scene.simulation.time_step;
+        let stepper = TimeStepper {
+            bound: StabilityBound::new(h, mat.sound_speed_m_s, model.max_viscosity().to_f64()),
+            support_radius: h,
+            safety_factor: ts.safety_factor,
+            fixed: ts.fixed_s,
+        };
+        let d = &scene.domain;
+        let diagonal = (0..3).map(|a| (d.max_m[a] - d.min_m[a]).powi(2)).sum::<f64>().sqrt();
+        let g_norm = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+        let jet = inlets.iter().map(Inlet::speed).fold(0.0, f64::max);
+        let initial_speed = initial.fluid_velocity.iter().map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()).fold(0.0, f64::max);
+        let runaway_speed = 2.0 * ((2.0 * g_norm * diagonal).sqrt() + jet.max(initial_speed)) + mat.sound_speed_m_s;
+        let mut sim = Self {
+            particles,
+            grid: NeighborGrid::new(d.min_m, d.max_m, h, boundary_count + fluid_capacity),
+            fluid,
+            model,
+            inlets,
+            stepper,
+            time: 0.0,
+            steps: 0,
+            previous_dt: None,
+            removed: 0,
+            fluid_capacity,
+            fluid_count: initial.fluid.len(),
+            next_id: (boundary_count + initial.fluid.len()) as u32,
+            diagnostics: Diagnostics::default(),
+            runaway_speed,
+            last_dt: 0.0,
+            last_limit: Limit::Acoustic,
+        };
+        sim.sort_and_density();
+        sim.diagnostics.max_speed = jet.max(initial_speed);
+        sim
+    }
+
+    /// Fluid particles now in the run.
+    pub fn fluid_count(&self) -> usize {
+        self.fluid_count
+    }
+
+    pub fn boundary_count(&self) -> usize {
+        self.fluid.boundary_count as usize
+    }
+
+    /// Bytes of particle and grid memory the run allocated.
+    pub fn memory_bytes(&self) -> usize {
+        self.particles.capacity() * self.particles.bytes_per_particle() + self.grid.bytes()
+    }
+
+    /// The neighbor grid of the particles' current order (valid after a step).
+    pub fn neighborhood(&self) -> coil_kernels::cell_grid::Neighborhood<'_> {
+        self.grid.neighborhood(self.particles.position_view())
+    }
+
+    /// dt for the next step and what limits it.
+    pub fn next_dt(&self) -> (f64, Limit) {
+        self.stepper.next(self.diagnostics.max_speed)
+    }
+
+    /// One step of Algorithm 1 with the automatic (or fixed) dt.
+    pub fn step(&mut self) -> Result<(), Instability> {
+        let (dt, limit) = self.next_dt();
+        self.step_with(dt, limit)
+    }
+
+    /// One step of Algorithm 1 with a given dt (s).
+    pub fn step_with(&mut self, dt: f64, limit: Limit) -> Result<(), Instability> {
+        // Line 1: inject.
+        for inlet in &mut self.inlets {
+            let budget = self.fluid_capacity - self.fluid_count;
+            self.fluid_count += inlet.inject(self.time, dt, budget, &mut self.next_id, &mut self.particles);
+        }
+        self.sort_and_density();
+        let p = &mut self.particles;
+        let n = p.len();
+        // Lines 9-16: velocity gradient and stress, accelerations.
+        self.model.accelerations(&self.grid, &self.fluid, p);
+        // Lines 17-19: leap-frog.
+        let kick_dt = match self.previous_dt {
+            Some(prev) => 0.5 * (prev + dt),
+            None => 0.5 * dt,
+        };
+        {
+            let [ax, ay, az] = &p.acceleration;
+            let args = LeapfrogArgs {
+                fluid: self.fluid,
+                dt: R::from_f64(dt),
+                kick_dt: R::from_f64(kick_dt),
+                id: View::new(&p.id[..n]),
+                acceleration: coil_kernels::view::Vec3View::new(&ax[..n], &ay[..n], &az[..n]),
+                position: vec3_view_mut(&mut p.position, n),
+                velocity_half: vec3_view_mut(&mut p.velocity_half, n),
+                velocity: vec3_view_mut(&mut p.velocity, n),
+            };
+            launch(n, |i| leapfrog_pass(i, &args));
+        }
+        self.previous_dt = Some(dt);
+        self.time += dt;
+        self.steps += 1;
+        self.last_dt = dt;
+        self.last_limit = limit;
+        self.diagnostics = self.measure();
+        if self.diagnostics.bad_particles > 0 {
+            return Err(Instability {
+                step: self.steps,
+                time_s: self.time,
+                bad_particles: self.diagnostics.bad_particles,
+                max_speed_m_s: self.diagnostics.max_speed,
+                runaway_speed_m_s: self.runaway_speed,
+                dt_s: dt,
+                stability_bound_s: self.stepper.bound.dt().0,
+            });
+        }
+        Ok(())
+    }
+
+    /// Algorithm 1, line 3: neighbors, dropping particles that left the domain; lines 5-8:
+    /// density (pressure is evaluated from it where it is read).
+    fn sort_and_density(&mut self) {
+        let removed = self.grid.sort(&mut self.particles);
+        self.removed += removed as u64;
+        self.fluid_count -= removed;
+        let p = &mut self.particles;
+        let n = p.len();
+        let args = DensityArgs {
+            neighborhood: self.grid.neighborhood(vec3_view(&p.position, n)),
+            fluid: self.fluid,
+            density: view_mut(&mut p.density, n),
+        };
+        launch(n, |i| density_pass(i, &args));
+    }
+
+    /// Largest speed and density error over the fluid, and how many fluid particles run away.
+    pub fn measure(&self) -> Diagnostics {
+        let p = &self.particles;
+        let n = p.len();
+        let v = vec3_view(&p.velocity, n);
+        let id = p.id_view();
+        let rho0 = self.fluid.rest_density.to_f64();
+        let runaway2 = self.runaway_speed * self.runaway_speed;
+        (0..n)
+            .into_par_iter()
+            .with_min_len(1024)
+            .filter(|&i| !self.fluid.is_boundary(id.at(i)))
+            .map(|i| {
+                let [x, y, z] = v.at(i).map(|c| c.to_f64());
+                let speed2 = x * x + y * y + z * z;
+                let finite = speed2.is_finite();
+                Diagnostics {
+                    max_speed: if finite { speed2.sqrt() } else { 0.0 },
+                    max_density_error: (p.density[i].to_f64() - rho0).abs() / rho0,
+                    bad_particles: usize::from(!finite || speed2 > runaway2),
+                }
+            })
+            .reduce(Diagnostics::default, |a, b| Diagnostics {
+                max_speed: a.max_speed.max(b.max_speed),
+                max_density_error: a.max_density_error.max(b.max_density_error),
+                bad_particles: a.bad_particles + b.bad_particles,
+            })
+    }
+}

@@ -1,0 +1,50 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use coil::scene::Scene;
+
+/// A scene from TOML text, validated like a file.
+pub fn scene(text: &str) -> Scene {
+    Scene::parse(text, "test.toml").unwrap_or_else(|e| panic!("test scene invalid: {e}"))
+}
+
+/// A closed box of interior `box_m` (from the origin) holding a block of fluid of `fluid_m`.
+pub fn box_scene(spacing: f64, box_m: [f64; 3], fluid_m: [f64; 3], extra: &str) -> String {
+    let pad = 5.0 * spacing;
+    format!(
+        r#"
+name = "test"
+[material]
+clamp_negative_pressure = true
+particle_spacing_m = {spacing}
+sound_speed_m_s = 20.0
+gravity_m_s2 = [0.0, 0.0, 0.0]
+[material.viscosity]
+nu0_m2_s = 0.01
+[domain]
+min_m = [{m}, {m}, {m}]
+max_m = [{x}, {y}, {z}]
+[simulation]
+end_time_s = 1.0
+precision = "f64"
+[[boundary]]
+shape = "box"
+min_m = [0.0, 0.0, 0.0]
+max_m = [{bx}, {by}, {bz}]
+[[fluid_block]]
+min_m = [0.0, 0.0, 0.0]
+max_m = [{fx}, {fy}, {fz}]
+{extra}
+"#,
+        m = -pad,
+        x = box_m[0] + pad,
+        y = box_m[1] + pad,
+        z = box_m[2] + pad,
+        bx = box_m[0],
+        by = box_m[1],
+        bz = box_m[2],
+        fx = fluid_m[0],
+        fy = fluid_m[1],
+        fz = fluid_m[2],
+    )
+}

@@ -1,0 +1,157 @@
+//! The kernels' building blocks against analytic values.
+
+use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
+use coil_kernels::fluid::Fluid;
+use coil_kernels::leapfrog::{leapfrog_pass, LeapfrogArgs};
+use coil_kernels::smoothing::SmoothingKernels;
+use coil_kernels::vec3::{Mat3, Vec3};
+use coil_kernels::velocity_gradient::{rate_of_deformation, shear_rate};
+use coil_kernels::view::{Vec3View, Vec3ViewMut, View};
+use coil_kernels::Real;
+
+/// Integral of `f(r)` over the ball of radius h by the midpoint rule in r (4 pi r^2 dr).
+fn radial_integral(h: f64, f: impl Fn(f64) -> f64) -> f64 {
+    let n = 20_000;
+    let dr = h / n as f64;
+    (0..n).map(|k| (k as f64 + 0.5) * dr).map(|r| 4.0 * std::f64::consts::PI * r * r * f(r) * dr).sum()
+}
+
+#[test]
+fn poly6_and_spiky_integrate_to_one() {
+    let h = 0.037;
+    let k = SmoothingKernels::<f64>::new(h);
+    // Midpoint rule error is O((dr/h)^2) = 2.5e-9.
+    let poly6 = radial_integral(h, |r| k.poly6(r * r));
+    assert!((poly6 - 1.0).abs() < 1e-6, "poly6 integrates to {poly6}");
+    // For a kernel normalised to 1, int grad W · x dV = -3 int W dV = -3 (divergence theorem).
+    let div_moment = radial_integral(h, |r| {
+        let g = k.spiky_gradient(Vec3::new(r, 0.0, 0.0), r * r);
+        g.x * r
+    });
+    assert!((div_moment + 3.0).abs() < 1e-5, "int grad W . x dV = {div_moment}, want -3");
+}
+
+#[test]
+fn viscosity_laplacian_matches_its_closed_form_integral() {
+    // int lap W_v dV = 45 / (pi h^6) int (h - r) 4 pi r^2 dr = 45 / (pi h^6) * pi h^4 / 3.
+    let h = 0.02;
+    let k = SmoothingKernels::<f64>::new(h);
+    let integral = radial_integral(h, |r| k.viscosity_laplacian(r * r));
+    let expected = 15.0 / (h * h);
+    assert!((integral / expected - 1.0).abs() < 1e-6, "{integral} vs {expected}");
+}
+
+#[test]
+fn spiky_gradient_is_antisymmetric() {
+    let k = SmoothingKernels::<f64>::new(0.05);
+    let pairs = [Vec3::new(0.01, -0.02, 0.003), Vec3::new(-0.03, 0.001, 0.02), Vec3::new(1e-9, 0.0, 0.0)];
+    for r in pairs {
+        let gij = k.spiky_gradient(r, r.norm2());
+        let gji = k.spiky_gradient(-r, r.norm2());
+        assert_eq!(gij, -gji);
+        // The kernel decreases outwards, so grad_i W points from i towards j.
+        assert!(gij.dot(r) < 0.0);
+    }
+    assert_eq!(k.spiky_gradient(Vec3::zero(), 0.0), Vec3::zero(), "coincident particles: finite, zero");
+    let outside = Vec3::new(0.05, 0.0, 0.0);
+    assert_eq!(k.spiky_gradient(outside, outside.norm2()), Vec3::zero());
+}
+
+fn gradient(rows: [[f64; 3]; 3]) -> Mat3<f64> {
+    Mat3 { m: rows }
+}
+
+#[test]
+fn shear_rate_of_simple_shear_extension_and_rotation() {
+    let g = -3.5;
+    // v = (g y, 0, 0): dv_x/dy = g.
+    let shear = gradient([[0.0, g, 0.0], [0.0; 3], [0.0; 3]]);
+    assert!((shear_rate(rate_of_deformation(shear)) - g.abs()).abs() < 1e-12);
+    // Uniaxial extension v = (e x, -e y / 2, -e z / 2): D = sqrt(3) e.
+    let e = 2.0;
+    let ext = gradient([[e, 0.0, 0.0], [0.0, -e / 2.0, 0.0], [0.0, 0.0, -e / 2.0]]);
+    assert!((shear_rate(rate_of_deformation(ext)) - 3f64.sqrt() * e).abs() < 1e-12);
+    // Rigid rotation about z, v = w x r = (-w y, w x, 0).
+    let w = 7.0;
+    let rot = gradient([[0.0, -w, 0.0], [w, 0.0, 0.0], [0.0; 3]]);
+    assert_eq!(shear_rate(rate_of_deformation(rot)), 0.0);
+}
+
+#[test]
+fn cross_model_limits() {
+    let cross = Cross { nu0: 2.0, nu_inf: 0.2, k: 10.0, n: 1.0 };
+    assert_eq!(cross.viscosity(0.0), 2.0, "zero shear gives nu0");
+    let high = cross.viscosity(1e9);
+    assert!((high - 0.2) / 0.2 < 1e-6, "large shear gives nu_inf, got {high}");
+    // K D = 1 is the midpoint for every n.
+    for n in [0.5, 1.0, 10.0] {
+        let c = Cross { n, ..cross };
+        assert!((c.viscosity(0.1) - 1.1).abs() < 1e-12);
+    }
+    let k_zero = Cross { k: 0.0, ..cross };
+    for d in [0.0, 1.0, 1e6] {
+        assert_eq!(k_zero.viscosity(d), 2.0, "K = 0 is Newtonian with nu0");
+    }
+    assert_eq!(Newtonian { nu0: 0.05 }.viscosity(123.0), 0.05);
+    // Shear thinning is monotone.
+    let mut last = f64::INFINITY;
+    for d in [0.0, 0.01, 0.1, 1.0, 10.0, 100.0] {
+        let nu = cross.viscosity(d);
+        assert!(nu < last || d == 0.0);
+        last = nu;
+    }
+}
+
+fn fluid<R: Real>() -> Fluid<R> {
+    Fluid {
+        mass: R::ONE,
+        rest_density: R::from_f64(1000.0),
+        sound_speed2: R::ONE,
+        pressure_floor: R::from_f64(f64::NEG_INFINITY),
+        gravity: Vec3::zero(),
+        kernels: SmoothingKernels::new(0.01),
+        boundary_count: 0,
+    }
+}
+
+/// 1000 leap-frog steps of dt = 1e-6 s at 1 mm/s must advance 1 um within 1 %.
+fn motion_is_kept<R: Real>() {
+    for x0 in [0.0, 0.013, 0.5, 0.731, 0.999_999] {
+        let mut pos = [vec![x0], vec![1.0 - x0], vec![0.25]];
+        let mut vh = [vec![R::from_f64(1e-3)], vec![R::from_f64(-1e-3)], vec![R::ZERO]];
+        let mut v = [vec![R::ZERO], vec![R::ZERO], vec![R::ZERO]];
+        let zero = [R::ZERO];
+        let id = [0u32];
+        for _ in 0..1000 {
+            let [px, py, pz] = &mut pos;
+            let [hx, hy, hz] = &mut vh;
+            let [vx, vy, vz] = &mut v;
+            let args = LeapfrogArgs {
+                fluid: fluid::<R>(),
+                dt: R::from_f64(1e-6),
+                kick_dt: R::from_f64(1e-6),
+                id: View::new(&id),
+                acceleration: Vec3View::new(&zero, &zero, &zero),
+                position: Vec3ViewMut::new(px, py, pz),
+                velocity_half: Vec3ViewMut::new(hx, hy, hz),
+                velocity: Vec3ViewMut::new(vx, vy, vz),
+            };
+            leapfrog_pass(0, &args);
+        }
+        let dx = pos[0][0] - x0;
+        let dy = pos[1][0] - (1.0 - x0);
+        for d in [dx, -dy] {
+            assert!((d / 1e-6 - 1.0).abs() < 0.01, "{}: at x = {x0} moved {d:e} m, want 1e-6 m", R::NAME);
+        }
+    }
+}
+
+#[test]
+fn slow_motion_is_not_rounded_away_f32() {
+    motion_is_kept::<f32>();
+}
+
+#[test]
+fn slow_motion_is_not_rounded_away_f64() {
+    motion_is_kept::<f64>();
+}

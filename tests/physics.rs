@@ -1,0 +1,234 @@
+//! Whole-particle-system checks: gradients, conservation, rest, neighbors, reproducibility.
+
+mod common;
+
+use coil::model::{LaplacianModel, Model, StressModel};
+use coil::setup::initial_particles;
+use coil::simulation::Simulation;
+use coil_kernels::acceleration::acceleration;
+use coil_kernels::acceleration::StressDivergence;
+use coil_kernels::cross_viscosity::{Cross, Newtonian};
+use coil_kernels::velocity_gradient::velocity_gradient;
+use coil_kernels::view::{SymTensorView, View};
+
+fn simulation<M: Model<f64>>(text: &str, model: M) -> Simulation<f64, M> {
+    let scene = common::scene(text);
+    let initial = initial_particles(&scene, "test.toml").expect("valid");
+    Simulation::new(&scene, &initial, model)
+}
+
+fn position(sim: &Simulation<f64, impl Model<f64>>, i: usize) -> [f64; 3] {
+    [0, 1, 2].map(|a| sim.particles.position[a][i])
+}
+
+#[test]
+fn velocity_gradient_of_a_linear_field_in_the_interior() {
+    let s = 0.01;
+    let mut sim = simulation(&common::box_scene(s, [0.12; 3], [0.12; 3], ""), StressModel(Newtonian { nu0: 0.01 }));
+    let g = [[0.3, -1.2, 0.5], [2.0, 0.1, -0.7], [0.4, 0.9, -0.4]];
+    let n = sim.particles.len();
+    for i in 0..n {
+        let x = position(&sim, i);
+        let fluid = !sim.fluid.is_boundary(sim.particles.id[i]);
+        for a in 0..3 {
+            sim.particles.velocity[a][i] = if fluid { (0..3).map(|b| g[a][b] * x[b]).sum() } else { 0.0 };
+        }
+    }
+    let velocity = sim.particles.velocity_view();
+    let density = sim.particles.density_view();
+    // Eq. (8) on the lattice returns alpha grad v, with alpha = sum_j V_j o_x dW/dx(-o) the
+    // lattice quadrature of int x (x) grad W dV = I (offsets o = x_j - x_i, V_j = m / rho0).
+    let kernels = sim.fluid.kernels;
+    let mut alpha = 0.0;
+    for k in -2i32..=2 {
+        for j in -2i32..=2 {
+            for i in -2i32..=2 {
+                let o = coil_kernels::Vec3::new(i as f64 * s, j as f64 * s, k as f64 * s);
+                alpha += sim.fluid.mass / 1000.0 * o.x * kernels.spiky_gradient(-o, o.norm2()).x;
+            }
+        }
+    }
+    assert!((alpha - 1.0).abs() < 0.06, "lattice moment alpha = {alpha}");
+    let mut checked = 0;
+    for i in 0..n {
+        let x = position(&sim, i);
+        // Interior: the whole support, h = 2 s, lies in the fluid.
+        if x.iter().any(|&c| c < 2.5 * s || c > 0.12 - 2.5 * s) {
+            continue;
+        }
+        let m = velocity_gradient(i, &sim.neighborhood(), &velocity, &density, &sim.fluid).m;
+        for a in 0..3 {
+            for b in 0..3 {
+                let want = alpha * g[a][b];
+                assert!((m[a][b] - want).abs() < 1e-9, "grad v[{a}][{b}] = {} want {want}", m[a][b]);
+            }
+        }
+        checked += 1;
+    }
+    assert!(checked >= 27, "checked {checked} interior particles");
+}
+
+#[test]
+fn pressure_and_viscous_forces_conserve_momentum() {
+    // A jittered block in free space: no walls, no gravity, every pair force inside the set.
+    let text = common::box_scene(0.01, [0.1; 3], [0.1; 3], "").replace(
+        "[[boundary]]\nshape = \"box\"\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [0.1, 0.1, 0.1]\n",
+        "",
+    );
+    let cross = Cross { nu0: 0.5, nu_inf: 0.05, k: 1.0, n: 1.0 };
+    let mut sim = simulation(&text, StressModel(cross));
+    assert_eq!(sim.boundary_count(), 0);
+    let n = sim.particles.len();
+    let mut seed = 12345u64;
+    let mut rand = || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+    };
+    for i in 0..n {
+        for a in 0..3 {
+            sim.particles.position[a][i] += 0.003 * rand();
+            sim.particles.velocity[a][i] = rand();
+            sim.particles.velocity_half[a][i] = sim.particles.velocity[a][i];
+        }
+    }
+    sim.step_with(1e-5, coil::time_step::Limit::Fixed).expect("stable");
+    let mut total = [0.0f64; 3];
+    let mut scale = 0.0f64;
+    for i in 0..n {
+        for a in 0..3 {
+            total[a] += sim.particles.acceleration[a][i];
+            scale += sim.particles.acceleration[a][i].abs();
+        }
+    }
+    assert!(scale > 1.0, "forces are not trivially zero ({scale})");
+    for a in 0..3 {
+        // Equal masses: sum m a = m sum a. Round-off of ~1e3 pair terms of size `scale`.
+        assert!(total[a].abs() < 1e-10 * scale, "net force along {a}: {} (scale {scale})", total[a]);
+    }
+}
+
+#[test]
+fn laplacian_model_runs_and_is_not_the_stress_model() {
+    let text = common::box_scene(0.02, [0.2, 0.3, 0.2], [0.2, 0.2, 0.2], "")
+        .replace("gravity_m_s2 = [0.0, 0.0, 0.0]", "gravity_m_s2 = [0.0, -9.8, 0.0]");
+    let mut a = simulation(&text, LaplacianModel(Newtonian { nu0: 0.01 }));
+    let mut b = simulation(&text, StressModel(Newtonian { nu0: 0.01 }));
+    assert!(a.particles.stress.is_none(), "the Laplacian operator allocates no stress");
+    for _ in 0..50 {
+        a.step().expect("stable");
+        b.step().expect("stable");
+    }
+    assert_ne!(a.particles.velocity[1][..a.particles.len()], b.particles.velocity[1][..b.particles.len()]);
+}
+
+#[test]
+fn fluid_at_rest_without_gravity_stays_exactly_at_rest() {
+    // A box filled with fluid on the lattice: every density is rho0, every pressure zero.
+    let mut sim = simulation(&common::box_scene(0.02, [0.2; 3], [0.2; 3], ""), StressModel(Newtonian { nu0: 0.01 }));
+    for _ in 0..100 {
+        sim.step().expect("stable");
+    }
+    assert!(sim.diagnostics.max_speed < 1e-10, "{:?}", sim.diagnostics);
+    assert!(sim.diagnostics.max_density_error < 1e-12, "{:?}", sim.diagnostics);
+}
+
+#[test]
+fn fluid_at_rest_under_gravity_stays_near_rest() {
+    // A closed box filled under gravity settles to hydrostatic compression rho g H / c^2; the
+    // start from uniform density sends acoustic waves of speed amplitude ~ g H / c.
+    let (h_m, c, g) = (0.2, 20.0, 9.8);
+    let text = common::box_scene(0.02, [0.2; 3], [0.2; 3], "")
+        .replace("gravity_m_s2 = [0.0, 0.0, 0.0]", "gravity_m_s2 = [0.0, -9.8, 0.0]");
+    let mut sim = simulation(&text, StressModel(Newtonian { nu0: 0.01 }));
+    let mut max_speed = 0.0f64;
+    while sim.time < 0.3 {
+        sim.step().expect("stable");
+        max_speed = max_speed.max(sim.diagnostics.max_speed);
+    }
+    let acoustic = g * h_m / c;
+    assert!(max_speed < 3.0 * acoustic, "max speed {max_speed} m/s, acoustic scale {acoustic} m/s");
+    assert_eq!(sim.removed, 0);
+    // Interior compression: at most a few times rho g H / c^2 = 0.5 %, where the lid layer that
+    // gravity pulls away from the lid shows a free-surface deficit instead.
+    let p = &sim.particles;
+    let worst_interior = (0..p.len())
+        .filter(|&i| !sim.fluid.is_boundary(p.id[i]) && p.position[1][i] < 0.15)
+        .map(|i| (p.density[i] / 1000.0 - 1.0).abs())
+        .fold(0.0, f64::max);
+    assert!(worst_interior < 5.0 * g * h_m / (c * c), "interior density error {worst_interior}");
+}
+
+#[test]
+fn neighbor_search_equals_brute_force() {
+    let text = common::box_scene(0.01, [0.08; 3], [0.08; 3], "");
+    let mut sim = simulation(&text, StressModel(Newtonian { nu0: 0.01 }));
+    let n = sim.particles.len();
+    let mut seed = 99u64;
+    for i in 0..n {
+        for a in 0..3 {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            sim.particles.position[a][i] += 0.02 * (((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5);
+        }
+    }
+    // One step re-sorts the jittered particles; compare on the sorted state.
+    sim.step_with(1e-9, coil::time_step::Limit::Fixed).expect("stable");
+    let n = sim.particles.len();
+    let h2 = sim.fluid.kernels.h2;
+    let nb = sim.neighborhood();
+    for i in (0..n).step_by(7) {
+        let mut grid = Vec::new();
+        nb.for_each_neighbor(i, h2, |j, _, _: f64| grid.push(j));
+        let xi = position(&sim, i);
+        let mut brute: Vec<usize> = (0..n)
+            .filter(|&j| {
+                let xj = position(&sim, j);
+                let r: Vec<f64> = (0..3).map(|a| xi[a] - xj[a]).collect();
+                r[0] * r[0] + r[1] * r[1] + r[2] * r[2] < h2
+            })
+            .collect();
+        grid.sort_unstable();
+        brute.sort_unstable();
+        assert_eq!(grid, brute, "particle {i}");
+    }
+}
+
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let text = common::box_scene(0.02, [0.3, 0.3, 0.2], [0.12, 0.2, 0.2], "")
+        .replace("gravity_m_s2 = [0.0, 0.0, 0.0]", "gravity_m_s2 = [0.0, -9.8, 0.0]");
+    let cross = Cross { nu0: 0.05, nu_inf: 0.005, k: 1.0, n: 1.0 };
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+        pool.install(|| {
+            let mut sim = simulation(&text, StressModel(cross));
+            for _ in 0..60 {
+                sim.step().expect("stable");
+            }
+            let p = &sim.particles;
+            let n = p.len();
+            (p.id[..n].to_vec(), [0, 1, 2].map(|a| p.position[a][..n].to_vec()), [0, 1, 2].map(|a| p.velocity[a][..n].to_vec()))
+        })
+    };
+    let one = run(1);
+    let two = run(2);
+    assert_eq!(one.0, two.0, "same order");
+    for a in 0..3 {
+        assert!(one.1[a].iter().zip(&two.1[a]).all(|(x, y)| x.to_bits() == y.to_bits()), "positions differ");
+        assert!(one.2[a].iter().zip(&two.2[a]).all(|(x, y)| x.to_bits() == y.to_bits()), "velocities differ");
+    }
+}
+
+#[test]
+fn stress_divergence_reads_the_stress_it_is_given() {
+    // With zero stress the paper's viscous term vanishes: acceleration = pressure + gravity only.
+    let sim = simulation(&common::box_scene(0.02, [0.2; 3], [0.2; 3], ""), StressModel(Newtonian { nu0: 0.01 }));
+    let n = sim.particles.len();
+    let zeros = vec![0.0; n];
+    let z = View::new(&zeros[..]);
+    let op = StressDivergence { stress: SymTensorView { xx: z, yy: z, zz: z, xy: z, xz: z, yz: z } };
+    let density = sim.particles.density_view();
+    for i in 0..n {
+        let a = acceleration(i, &sim.neighborhood(), &density, &sim.fluid, &op);
+        assert!(a.norm() < 1e-9, "lattice at rest density has no force, got {a:?}");
+    }
+}
