@@ -47,7 +47,7 @@ impl fmt::Display for Instability {
         } else {
             write!(
                 f,
-                "dt = {:.3e} s was within the Eq. (10) bound {:.3e} s; likely causes: particles injected into or overlapping walls, a sound speed too low for the flow speed, or a viscosity near the limit of the time step; try a smaller simulation.time_step.safety_factor.",
+                "dt = {:.3e} s was within the Eq. (10) bound {:.3e} s; likely causes: free-surface tension from Eq. (6) at a high sound speed (set material.clamp_negative_pressure = true), a sound speed too low for the flow speed (walls give way above Mach 1), or particles injected into walls; or try a smaller simulation.time_step.safety_factor.",
                 self.dt_s, self.stability_bound_s
             )
         }
@@ -78,6 +78,8 @@ pub struct Simulation<R: Real, M: Model<R>> {
     previous_dt: Option<f64>,
     /// Fluid particles removed for leaving the domain box.
     pub removed: u64,
+    /// Fluid particles injected by inlets.
+    pub injected: u64,
     fluid_capacity: usize,
     fluid_count: usize,
     next_id: u32,
@@ -142,6 +144,7 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             steps: 0,
             previous_dt: None,
             removed: 0,
+            injected: 0,
             fluid_capacity,
             fluid_count: initial.fluid.len(),
             next_id: (boundary_count + initial.fluid.len()) as u32,
@@ -190,7 +193,9 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         // Line 1: inject.
         for inlet in &mut self.inlets {
             let budget = self.fluid_capacity - self.fluid_count;
-            self.fluid_count += inlet.inject(self.time, dt, budget, &mut self.next_id, &mut self.particles);
+            let added = inlet.inject(self.time, dt, budget, &mut self.next_id, &mut self.particles);
+            self.fluid_count += added;
+            self.injected += added as u64;
         }
         self.sort_and_density();
         let p = &mut self.particles;

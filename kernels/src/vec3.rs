@@ -83,16 +83,20 @@ impl<R: Real> Mat3<R> {
         Self { m: [[R::ZERO; 3]; 3] }
     }
 
-    /// Adds `a ⊗ b` (`m[r][c] += a_r b_c`).
+    /// Adds `a ⊗ b` (`m[r][c] += a_r b_c`). Written out so the device keeps the matrix in
+    /// registers rather than a local-memory array.
     #[inline(always)]
     pub fn add_outer(&mut self, a: Vec3<R>, b: Vec3<R>) {
-        let a = [a.x, a.y, a.z];
-        let b = [b.x, b.y, b.z];
-        for (row, ar) in self.m.iter_mut().zip(a) {
-            for (cell, bc) in row.iter_mut().zip(b) {
-                *cell += ar * bc;
-            }
-        }
+        let m = &mut self.m;
+        m[0][0] += a.x * b.x;
+        m[0][1] += a.x * b.y;
+        m[0][2] += a.x * b.z;
+        m[1][0] += a.y * b.x;
+        m[1][1] += a.y * b.y;
+        m[1][2] += a.y * b.z;
+        m[2][0] += a.z * b.x;
+        m[2][1] += a.z * b.y;
+        m[2][2] += a.z * b.z;
     }
 
     #[inline(always)]

@@ -1,0 +1,136 @@
+//! Inlets deliver the mass flow rate they were given; dt follows Eq. (10) and refuses unsafe
+//! fixed steps.
+
+mod common;
+
+use coil::model::StressModel;
+use coil::setup::initial_particles;
+use coil::simulation::Simulation;
+use coil::time_step::Limit;
+use coil_kernels::cross_viscosity::Newtonian;
+
+fn jet_scene(nozzle: &str, extra: &str) -> String {
+    format!(
+        r#"
+name = "jet"
+[material]
+particle_spacing_m = 0.002
+clamp_negative_pressure = true
+sound_speed_m_s = 20.0
+gravity_m_s2 = [0.0, 0.0, 0.0]
+[material.viscosity]
+nu0_m2_s = 0.001
+[domain]
+min_m = [-0.05, -0.2, -0.05]
+max_m = [0.05, 0.05, 0.05]
+[simulation]
+end_time_s = 1.0
+precision = "f64"
+max_fluid_particles = 200000
+[[inlet]]
+{nozzle}
+position_m = [0.0, 0.0, 0.0]
+direction = [0.0, -1.0, 0.0]
+speed_m_s = 0.5
+{extra}
+"#
+    )
+}
+
+fn delivered_mass_rate(text: &str, nominal_area: f64) {
+    let scene = common::scene(text);
+    let initial = initial_particles(&scene, "jet.toml").expect("valid");
+    let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.001 }));
+    let duration = 0.2;
+    while sim.time < duration - 1e-12 {
+        let (dt, limit) = sim.next_dt();
+        sim.step_with(dt.min(duration - sim.time), limit).expect("stable");
+    }
+    let mass = sim.injected as f64 * sim.fluid.mass;
+    let nominal = 1000.0 * nominal_area * 0.5 * duration;
+    // Layers arrive whole: the delivered mass is within one layer of rho0 A U t.
+    let layer_mass = sim.fluid.mass * layer_size(&scene);
+    assert!((mass - nominal).abs() <= layer_mass, "delivered {mass} kg, nominal {nominal} kg, layer {layer_mass} kg");
+    assert!(layer_mass < 0.05 * nominal, "the test resolves the rate to 5 %");
+}
+
+fn layer_size(scene: &coil::scene::Scene) -> f64 {
+    let inlet = coil::inlet::Inlet::new(&scene.inlets[0], scene.material.particle_spacing_m, 1.0, 1.0);
+    inlet.layer_size() as f64
+}
+
+#[test]
+fn circular_inlet_delivers_rho0_area_speed() {
+    let r = 0.007;
+    delivered_mass_rate(&jet_scene(&format!("nozzle = {{ shape = \"circle\", radius_m = {r} }}"), ""), std::f64::consts::PI * r * r);
+}
+
+#[test]
+fn rectangular_inlet_delivers_rho0_area_speed() {
+    delivered_mass_rate(
+        &jet_scene("nozzle = { shape = \"rectangle\", width_m = 0.013, depth_m = 0.005 }", ""),
+        0.013 * 0.005,
+    );
+}
+
+#[test]
+fn inlet_stops_at_the_particle_budget_and_moving_nozzle_follows_waypoints() {
+    let text = jet_scene(
+        "nozzle = { shape = \"circle\", radius_m = 0.004 }",
+        "motion = { waypoints = [[0.0, 0.0, 0.0, 0.0], [0.1, 0.02, 0.0, 0.0]] }",
+    )
+    .replace("max_fluid_particles = 200000", "max_fluid_particles = 500");
+    let scene = common::scene(&text);
+    let inlet = coil::inlet::Inlet::new(&scene.inlets[0], 0.002, 1.0, 1.0);
+    let (mid, v) = inlet.nozzle(0.05);
+    assert!((mid[0] - 0.01).abs() < 1e-12 && (v[0] - 0.2).abs() < 1e-12);
+    assert_eq!(inlet.nozzle(0.5).0, [0.02, 0.0, 0.0], "held at the last waypoint");
+    let initial = initial_particles(&scene, "jet.toml").expect("valid");
+    let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.001 }));
+    while sim.time < 0.2 {
+        sim.step().expect("stable");
+    }
+    let layer = inlet.layer_size();
+    assert_eq!(sim.fluid_count(), 500 / layer * layer, "whole layers up to the budget");
+}
+
+#[test]
+fn particles_leaving_the_domain_are_removed_and_counted() {
+    // The jet runs out of the bottom of the domain 0.2 m below the nozzle after 0.4 s.
+    let text = jet_scene("nozzle = { shape = \"circle\", radius_m = 0.004 }", "");
+    let scene = common::scene(&text);
+    let initial = initial_particles(&scene, "jet.toml").expect("valid");
+    let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.001 }));
+    while sim.time < 0.6 {
+        sim.step().expect("stable");
+    }
+    assert!(sim.removed > 0);
+    let p = &sim.particles;
+    assert!((0..p.len()).all(|i| p.position[1][i] >= -0.2), "no particle below the domain is kept");
+}
+
+#[test]
+fn automatic_dt_follows_equation_10() {
+    let text = common::box_scene(0.02, [0.2; 3], [0.2; 3], "");
+    let scene = common::scene(&text);
+    let initial = initial_particles(&scene, "box.toml").expect("valid");
+    let sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.01 }));
+    // h = 0.04 m, c = 20 m/s, nu0 = 0.01 m^2/s: 0.1 h / c = 2e-4 s, 0.1 h^2 / (8 nu0) = 2e-3 s.
+    let (dt, limit) = sim.next_dt();
+    assert!((dt - 2e-4).abs() < 1e-15 && limit == Limit::Acoustic, "{dt} {limit:?}");
+    let viscous = common::scene(&text.replace("nu0_m2_s = 0.01", "nu0_m2_s = 1.0"));
+    let sim = Simulation::<f64, _>::new(&viscous, &initial, StressModel(Newtonian { nu0: 1.0 }));
+    let (dt, limit) = sim.next_dt();
+    assert!((dt - 2e-5).abs() < 1e-15 && limit == Limit::Viscous, "{dt} {limit:?}");
+}
+
+#[test]
+fn fixed_dt_above_the_bound_is_refused_unless_overridden() {
+    let base = common::box_scene(0.02, [0.2; 3], [0.2; 3], "");
+    let above = base.replace("precision = \"f64\"", "precision = \"f64\"\n[simulation.time_step]\nfixed_s = 3e-4");
+    let err = coil::scene::Scene::parse(&above, "box.toml").expect_err("refused");
+    assert_eq!(err.field, "simulation.time_step.fixed_s");
+    assert!(err.reason.contains("Eq. (10)") && err.reason.contains("2.000e-4"), "{}", err.reason);
+    let allowed = above.replace("fixed_s = 3e-4", "fixed_s = 3e-4\nallow_above_stability_bound = true");
+    assert!(coil::scene::Scene::parse(&allowed, "box.toml").is_ok());
+}
