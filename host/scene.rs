@@ -302,10 +302,13 @@ impl Scene {
         positive("material.rest_density_kg_m3", m.rest_density_kg_m3)?;
         positive("material.sound_speed_m_s", m.sound_speed_m_s)?;
         positive("material.particle_spacing_m", m.particle_spacing_m)?;
-        if !(m.support_radius_factor >= 1.0 && m.support_radius_factor <= 4.0) {
+        if !(m.support_radius_factor > 1.0 && m.support_radius_factor <= 4.0) {
             return err(
                 "material.support_radius_factor",
-                format!("must be between 1 and 4 (2 gives about 33 neighbors), got {}", m.support_radius_factor),
+                format!(
+                    "must be above 1 (walls one spacing away would be invisible) and at most 4; 2 gives about 33 neighbors, got {}",
+                    m.support_radius_factor
+                ),
             );
         }
         if m.gravity_m_s2.iter().any(|g| !g.is_finite()) {

@@ -35,10 +35,15 @@ fn cells(extent: f64, s: f64) -> i64 {
     (extent / s).round().max(1.0) as i64
 }
 
-/// Wall layers: enough that a boundary particle within h of the fluid has a full support of
-/// boundary particles behind it, so walls carry no spurious suction from a density deficit.
+/// Wall layers (paper Sec. III-B: total width at least the support radius). Layer k, at depth
+/// (k + 1/2) s below the wall, meets the fluid (at s/2 and above) when (k + 1) s < h, and its own
+/// density by Eq. (5) needs layers down to depth (k + 1/2) s + h; covering both for the deepest
+/// such layer gives 2 ceil(h/s) - 2 layers, and never fewer than the paper's ceil(h/s). With
+/// h = 2 s that is 2, and every boundary particle a fluid particle sees has full support.
 pub fn boundary_layers(spacing: f64, support_radius: f64) -> i64 {
-    (support_radius / spacing).ceil() as i64 + 1
+    // The tolerance keeps h = 2 s, computed as 2.0000000001 s, at 2 spacings.
+    let per_support = (support_radius / spacing - 1e-9).ceil() as i64;
+    (2 * per_support - 2).max(per_support)
 }
 
 /// Builds the particles of `scene` and checks they fit the domain and do not overlap.

@@ -96,6 +96,9 @@ impl Neighborhood<'_> {
         let Some(c) = self.grid.cell_coords(xi) else {
             return;
         };
+        // Candidates are filtered in f64 and only neighbors are rounded to `R`: about 6 of 7
+        // candidates in the 27 cells lie outside the support.
+        let h2_f64 = h2.to_f64();
         let dims = self.grid.dims;
         let x_lo = c[0].saturating_sub(1);
         let x_hi = if c[0] + 1 < dims[0] { c[0] + 1 } else { c[0] };
@@ -106,14 +109,13 @@ impl Neighborhood<'_> {
                 let start = self.cell_start.at(first) as usize;
                 let end = self.cell_start.at(last + 1) as usize;
                 for j in start..end {
-                    let r_ij = Vec3::new(
-                        R::from_f64(xi[0] - self.position.x.at(j)),
-                        R::from_f64(xi[1] - self.position.y.at(j)),
-                        R::from_f64(xi[2] - self.position.z.at(j)),
-                    );
-                    let r2 = r_ij.norm2();
-                    if r2 < h2 {
-                        f(j, r_ij, r2);
+                    let dx = xi[0] - self.position.x.at(j);
+                    let dy = xi[1] - self.position.y.at(j);
+                    let dz = xi[2] - self.position.z.at(j);
+                    let r2 = dx * dx + dy * dy + dz * dz;
+                    if r2 < h2_f64 {
+                        let r_ij = Vec3::new(R::from_f64(dx), R::from_f64(dy), R::from_f64(dz));
+                        f(j, r_ij, R::from_f64(r2));
                     }
                 }
             }
