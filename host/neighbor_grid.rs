@@ -58,6 +58,7 @@ impl NeighborGrid {
         // Exclusive scan: chunk totals in parallel, their offsets serially, then each chunk.
         let chunks = self.chunk_offsets.len();
         let totals = view_mut(&mut self.chunk_offsets, chunks);
+        // SAFETY: invocation c writes only entry c.
         launch(chunks, |c| unsafe { totals.write(c, chunk_total(c, SCAN_CHUNK, counters)) });
         let mut running = 0u32;
         for t in self.chunk_offsets.iter_mut() {

@@ -86,7 +86,11 @@ impl<R: Real> Particles<R> {
     /// Bytes allocated per particle of capacity.
     pub fn bytes_per_particle(&self) -> usize {
         let r = std::mem::size_of::<R>();
-        3 * 8 + 3 * r * 3 + 4 + r + if self.stress.is_some() { 6 * r } else { 0 } + 8 + r + 4
+        let position = 3 * 8;
+        let velocities_and_acceleration = 3 * 3 * r;
+        let stress = if self.stress.is_some() { 6 * r } else { 0 };
+        let scratch = 8 + r + 4;
+        position + velocities_and_acceleration + 4 + r + stress + scratch
     }
 
     pub fn position_view(&self) -> Vec3View<'_, f64> {
