@@ -6,7 +6,7 @@ use crate::parallel::launch;
 use crate::neighbor_grid::NeighborGrid;
 use crate::particles::{vec3_view, vec3_view_mut, view_mut, Particles};
 use coil_kernels::acceleration::{acceleration_pass, AccelerationArgs, StressDivergence, VelocityLaplacian};
-use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
+use coil_kernels::cross_viscosity::{Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::velocity_gradient::{stress_pass, StressArgs};
 use coil_kernels::view::{SymTensorView, SymTensorViewMut, View};
@@ -16,8 +16,6 @@ use coil_kernels::Real;
 pub trait Model<R: Real>: Copy + Send + Sync + 'static {
     /// Whether the run stores a stress tensor per particle.
     const USES_STRESS: bool;
-    /// Name for logs and benchmarks.
-    fn name(&self) -> &'static str;
     /// Kinematic viscosity (m^2/s) at a shear rate (1/s), for output.
     fn viscosity(&self, shear_rate: R) -> R;
     /// Largest viscosity the run can reach (m^2/s), for the Eq. (10) bound.
@@ -57,73 +55,51 @@ fn stress_read<R: Real>(s: &[Vec<R>; 6], n: usize) -> SymTensorView<'_, R> {
     }
 }
 
-macro_rules! rheology_name {
-    (Newtonian) => {
-        "stress operator, Newtonian"
-    };
-    (Cross) => {
-        "stress operator, Cross"
-    };
-}
-
-macro_rules! stress_model {
-    ($law:ident, $max:expr) => {
-        impl<R: Real> Model<R> for StressModel<$law<R>> {
-            const USES_STRESS: bool = true;
-            fn name(&self) -> &'static str {
-                rheology_name!($law)
-            }
-            fn viscosity(&self, shear_rate: R) -> R {
-                self.0.viscosity(shear_rate)
-            }
-            fn max_viscosity(&self) -> R {
-                $max(&self.0)
-            }
-            fn accelerations(&self, grid: &NeighborGrid, fluid: &Fluid<R>, p: &mut Particles<R>) {
-                let n = p.len();
-                let neighborhood = grid.neighborhood(vec3_view(&p.position, n));
-                let mut stress = p.stress.take().expect("the stress operator allocates stress");
-                {
-                    let args = StressArgs {
-                        neighborhood,
-                        fluid: *fluid,
-                        rheology: self.0,
-                        velocity: vec3_view(&p.velocity, n),
-                        density: View::new(&p.density[..n]),
-                        stress: stress_views(&mut stress, n),
-                    };
-                    launch(n, |i| stress_pass(i, &args));
-                }
-                {
-                    let args = AccelerationArgs {
-                        neighborhood,
-                        fluid: *fluid,
-                        viscous: StressDivergence { stress: stress_read(&stress, n) },
-                        id: View::new(&p.id[..n]),
-                        density: View::new(&p.density[..n]),
-                        acceleration: vec3_view_mut(&mut p.acceleration, n),
-                    };
-                    launch(n, |i| acceleration_pass(i, &args));
-                }
-                p.stress = Some(stress);
-            }
+impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for StressModel<Rh> {
+    const USES_STRESS: bool = true;
+    fn viscosity(&self, shear_rate: R) -> R {
+        self.0.viscosity(shear_rate)
+    }
+    fn max_viscosity(&self) -> R {
+        self.0.max_viscosity()
+    }
+    fn accelerations(&self, grid: &NeighborGrid, fluid: &Fluid<R>, p: &mut Particles<R>) {
+        let n = p.len();
+        let neighborhood = grid.neighborhood(vec3_view(&p.position, n));
+        let mut stress = p.stress.take().expect("the stress operator allocates stress");
+        {
+            let args = StressArgs {
+                neighborhood,
+                fluid: *fluid,
+                rheology: self.0,
+                velocity: vec3_view(&p.velocity, n),
+                density: View::new(&p.density[..n]),
+                stress: stress_views(&mut stress, n),
+            };
+            launch(n, |i| stress_pass(i, &args));
         }
-    };
+        {
+            let args = AccelerationArgs {
+                neighborhood,
+                fluid: *fluid,
+                viscous: StressDivergence { stress: stress_read(&stress, n) },
+                id: View::new(&p.id[..n]),
+                density: View::new(&p.density[..n]),
+                acceleration: vec3_view_mut(&mut p.acceleration, n),
+            };
+            launch(n, |i| acceleration_pass(i, &args));
+        }
+        p.stress = Some(stress);
+    }
 }
-
-stress_model!(Newtonian, |law: &Newtonian<R>| law.nu0);
-stress_model!(Cross, |law: &Cross<R>| law.nu0);
 
 impl<R: Real> Model<R> for LaplacianModel<R> {
     const USES_STRESS: bool = false;
-    fn name(&self) -> &'static str {
-        "Laplacian operator, Newtonian"
-    }
-    fn viscosity(&self, _shear_rate: R) -> R {
-        self.0.nu0
+    fn viscosity(&self, shear_rate: R) -> R {
+        self.0.viscosity(shear_rate)
     }
     fn max_viscosity(&self) -> R {
-        self.0.nu0
+        self.0.max_viscosity()
     }
     fn accelerations(&self, grid: &NeighborGrid, fluid: &Fluid<R>, p: &mut Particles<R>) {
         let n = p.len();

@@ -208,13 +208,12 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             None => 0.5 * dt,
         };
         {
-            let [ax, ay, az] = &p.acceleration;
             let args = LeapfrogArgs {
                 fluid: self.fluid,
                 dt: R::from_f64(dt),
                 kick_dt: R::from_f64(kick_dt),
                 id: View::new(&p.id[..n]),
-                acceleration: coil_kernels::view::Vec3View::new(&ax[..n], &ay[..n], &az[..n]),
+                acceleration: vec3_view(&p.acceleration, n),
                 position: vec3_view_mut(&mut p.position, n),
                 velocity_half: vec3_view_mut(&mut p.velocity_half, n),
                 velocity: vec3_view_mut(&mut p.velocity, n),

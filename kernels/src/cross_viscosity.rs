@@ -7,6 +7,8 @@ use crate::real::Real;
 pub trait Rheology<R: Real>: Copy + Send + Sync {
     /// Kinematic viscosity (m^2/s) at shear rate `shear_rate` (1/s).
     fn viscosity(&self, shear_rate: R) -> R;
+    /// The largest viscosity the law reaches (m^2/s), which bounds dt by Eq. (10).
+    fn max_viscosity(&self) -> R;
 }
 
 /// Constant viscosity: the Cross model with K = 0.
@@ -20,6 +22,10 @@ pub struct Newtonian<R> {
 impl<R: Real> Rheology<R> for Newtonian<R> {
     #[inline(always)]
     fn viscosity(&self, _shear_rate: R) -> R {
+        self.nu0
+    }
+    #[inline(always)]
+    fn max_viscosity(&self) -> R {
         self.nu0
     }
 }
@@ -46,5 +52,10 @@ impl<R: Real> Rheology<R> for Cross<R> {
         // across all threads of a launch.
         let kd_n = if self.n == R::ONE { kd } else { kd.powf(self.n) };
         self.nu_inf + (self.nu0 - self.nu_inf) / (R::ONE + kd_n)
+    }
+    /// nu0: validation keeps nu_inf <= nu0, so the viscosity is largest at zero shear.
+    #[inline(always)]
+    fn max_viscosity(&self) -> R {
+        self.nu0
     }
 }
