@@ -40,6 +40,10 @@ impl Frame {
         let density = View::new(&p.density[..n]);
         self.all_shear_rate.resize(n, 0.0);
         self.all_shear_rate.par_iter_mut().enumerate().with_min_len(256).for_each(|(i, out)| {
+            // Boundary particles are not written; their neighbor loops would be wasted.
+            if fluid.is_boundary(p.id[i]) {
+                return;
+            }
             let grad = velocity_gradient(i, &neighborhood, &velocity, &density, &fluid);
             *out = shear_rate(rate_of_deformation(grad)).to_f64() as f32;
         });
