@@ -1,7 +1,9 @@
 //! Jet inlets (paper Sec. III-C): nozzle layers generated on the host and appended to the
-//! preallocated tail of the particle arrays.
+//! preallocated tail of the particle arrays, born inside the nozzle's tube
+//! (`coil_kernels::nozzle`) one support radius upstream of the exit.
 
 use crate::scene::{self, Nozzle, NozzleMotion};
+use coil_kernels::nozzle::NozzleTube;
 use coil_kernels::Real;
 
 use crate::particles::Particles;
@@ -12,6 +14,13 @@ pub struct Inlet {
     /// Particle offsets from the nozzle centre in the nozzle plane (m).
     layer: Vec<[f64; 3]>,
     direction: [f64; 3],
+    across: [[f64; 3]; 2],
+    /// Half-extents of the bore with clearance (m), see `NozzleTube::half_extent`.
+    half_extent: [f64; 2],
+    round: bool,
+    /// Length of the tube upstream of the exit, where layers are born (m).
+    tube_length: f64,
+    spacing: f64,
     speed: f64,
     position: [f64; 3],
     start: f64,
@@ -21,6 +30,29 @@ pub struct Inlet {
     layer_distance: f64,
     /// How far the newest layer has travelled from the nozzle (m).
     travelled: f64,
+    wobble: f64,
+    /// Layers injected so far, which seeds each layer's wobble.
+    layers: u64,
+}
+
+/// A point of the unit disc for layer `n`, from SplitMix64: the same sequence on every machine
+/// and thread count.
+fn wobble(n: u64) -> [f64; 2] {
+    let mut state = n.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    let mut next = || {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    loop {
+        let (a, b) = (next(), next());
+        if a * a + b * b <= 1.0 {
+            return [a, b];
+        }
+    }
 }
 
 fn normalized(v: [f64; 3]) -> [f64; 3] {
@@ -43,12 +75,14 @@ fn nozzle_axes(d: [f64; 3]) -> ([f64; 3], [f64; 3]) {
 
 impl Inlet {
     /// `mass` (kg) and `rest_density` (kg/m^3) fix the layer distance that makes the mass flow
-    /// rate equal rho0 A U for the nozzle's nominal area A.
-    pub fn new(config: &scene::Inlet, spacing: f64, mass: f64, rest_density: f64) -> Self {
+    /// rate equal rho0 A U for the nozzle's nominal area A. The tube is one support radius
+    /// `support_radius` (m) long, so the first free layer below the exit has full support.
+    pub fn new(config: &scene::Inlet, spacing: f64, support_radius: f64, mass: f64, rest_density: f64) -> Self {
         let direction = normalized(config.direction);
         let (e1, e2) = nozzle_axes(direction);
         let mut offsets = Vec::new();
-        let area = match config.nozzle {
+        let clearance = 0.5 * spacing + config.wobble_m;
+        let (area, half_extent, round) = match config.nozzle {
             Nozzle::Circle { radius_m } => {
                 let n = (radius_m / spacing).floor() as i64;
                 for j in -n..=n {
@@ -59,7 +93,7 @@ impl Inlet {
                         }
                     }
                 }
-                std::f64::consts::PI * radius_m * radius_m
+                (std::f64::consts::PI * radius_m * radius_m, [radius_m + clearance; 2], true)
             }
             Nozzle::Rectangle { width_m, depth_m } => {
                 let nw = ((width_m / spacing).round() as i64).max(1);
@@ -69,15 +103,19 @@ impl Inlet {
                         offsets.push(((i as f64 + 0.5) * spacing - 0.5 * width_m, (j as f64 + 0.5) * spacing - 0.5 * depth_m));
                     }
                 }
-                width_m * depth_m
+                (width_m * depth_m, [0.5 * width_m + clearance, 0.5 * depth_m + clearance], false)
             }
         };
-        let layer: Vec<[f64; 3]> =
-            offsets.iter().map(|&(a, b)| [0, 1, 2].map(|k| a * e1[k] + b * e2[k])).collect();
+        let layer: Vec<[f64; 3]> = offsets.iter().map(|&(a, b)| [0, 1, 2].map(|k| a * e1[k] + b * e2[k])).collect();
         let layer_distance = layer.len() as f64 * mass / (rest_density * area);
         Self {
             layer,
             direction,
+            across: [e1, e2],
+            half_extent,
+            round,
+            tube_length: support_radius,
+            spacing,
             speed: config.speed_m_s,
             position: config.position_m,
             start: config.start_s,
@@ -85,6 +123,8 @@ impl Inlet {
             motion: config.motion.clone(),
             layer_distance,
             travelled: layer_distance,
+            wobble: config.wobble_m,
+            layers: 0,
         }
     }
 
@@ -122,6 +162,20 @@ impl Inlet {
         }
     }
 
+    /// The nozzle's tube at time `t` (s), for the nozzle pass.
+    pub fn tube<R: Real>(&self, t: f64) -> NozzleTube<R> {
+        let (exit, nozzle_velocity) = self.nozzle(t);
+        NozzleTube {
+            exit,
+            axis: self.direction,
+            across: self.across,
+            half_extent: self.half_extent,
+            round: u32::from(self.round),
+            length: self.tube_length + 0.5 * self.spacing,
+            velocity: [0, 1, 2].map(|k| R::from_f64(self.speed * self.direction[k] + nozzle_velocity[k])),
+        }
+    }
+
     /// Advances the jet by `dt` from time `t` and appends every layer now due, while whole
     /// layers fit in `budget` more particles. Returns how many particles were added.
     pub fn inject<R: Real>(&mut self, t: f64, dt: f64, budget: usize, next_id: &mut u32, p: &mut Particles<R>) -> usize {
@@ -134,10 +188,14 @@ impl Inlet {
         let mut added = 0;
         while self.travelled >= self.layer_distance && added + self.layer.len() <= budget {
             self.travelled -= self.layer_distance;
-            // The new layer has already moved `travelled` past the nozzle during this step.
-            let ahead = self.travelled;
+            // The new layer is born at the tube's upstream end and has already moved
+            // `travelled` during this step.
+            let along = self.travelled - self.tube_length;
+            let [a, b] = wobble(self.layers).map(|u| u * self.wobble);
+            self.layers += 1;
+            let shift = [0, 1, 2].map(|k| along * self.direction[k] + a * self.across[0][k] + b * self.across[1][k]);
             for o in &self.layer {
-                let x = [0, 1, 2].map(|k| centre[k] + o[k] + ahead * self.direction[k]);
+                let x = [0, 1, 2].map(|k| centre[k] + o[k] + shift[k]);
                 p.push(*next_id, x, velocity);
                 *next_id += 1;
             }

@@ -2,8 +2,8 @@
 //! Newtonian or Cross rheology, or Müller's Laplacian. Each is a type, so the CPU loops and the
 //! GPU kernels of a run contain only the physics it uses.
 
-use crate::parallel::launch;
 use crate::neighbor_grid::NeighborGrid;
+use crate::parallel::launch;
 use crate::particles::{vec3_view, vec3_view_mut, view_mut, Particles};
 use coil_kernels::acceleration::{acceleration_pass, AccelerationArgs, StressDivergence, VelocityLaplacian};
 use coil_kernels::cross_viscosity::{Newtonian, Rheology};

@@ -69,7 +69,9 @@ impl fmt::Display for RunError {
         match self {
             RunError::Scene(e) => e.fmt(f),
             RunError::Io(e) => f.write_str(e),
-            RunError::Unstable(i, s) => write!(f, "{i}\nFrames written before it are kept ({}).", s.frames),
+            RunError::Unstable(i, s) => {
+                write!(f, "{i}\nFrames written before it are kept ({}).", s.frames)
+            }
         }
     }
 }
@@ -109,7 +111,12 @@ fn io_error(what: &str, path: &std::path::Path, e: std::io::Error) -> RunError {
     RunError::Io(format!("cannot write {what} {}: {e}", path.display()))
 }
 
-fn drive<R: Real, M: Model<R>>(scene: &Scene, initial: &InitialParticles, model: M, options: &RunOptions) -> Result<Summary, RunError> {
+fn drive<R: Real, M: Model<R>>(
+    scene: &Scene,
+    initial: &InitialParticles,
+    model: M,
+    options: &RunOptions,
+) -> Result<Summary, RunError> {
     let mut sim = Simulation::<R, M>::new(scene, initial, model);
     let dir = &options.out_dir;
 
@@ -185,7 +192,11 @@ fn drive<R: Real, M: Model<R>>(scene: &Scene, initial: &InitialParticles, model:
             let eta = (end - sim.time) / sim.time * wall;
             eprintln!(
                 "t = {:.5} / {end} s  step {}  dt {:.2e} s ({})  {} fluid particles  {rate:.1} steps/s  ETA {eta:.0} s",
-                sim.time, sim.steps, sim.last_dt, sim.last_limit, sim.fluid_count()
+                sim.time,
+                sim.steps,
+                sim.last_dt,
+                sim.last_limit,
+                sim.fluid_count()
             );
         }
     }

@@ -215,19 +215,20 @@ pub enum Boundary {
     },
     /// A horizontal plate whose top surface is at `height_m` (y), spanning x and z between
     /// `min_xz_m` and `max_xz_m` (default: the whole domain, a plane).
-    Plate {
-        height_m: f64,
-        min_xz_m: Option<[f64; 2]>,
-        max_xz_m: Option<[f64; 2]>,
-    },
+    Plate { height_m: f64, min_xz_m: Option<[f64; 2]>, max_xz_m: Option<[f64; 2]> },
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, tag = "shape", rename_all = "snake_case")]
 pub enum Nozzle {
-    Circle { radius_m: f64 },
+    Circle {
+        radius_m: f64,
+    },
     /// `width_m` along the first in-plane axis, `depth_m` along the second (see `inlet`).
-    Rectangle { width_m: f64, depth_m: f64 },
+    Rectangle {
+        width_m: f64,
+        depth_m: f64,
+    },
 }
 
 /// A jet inlet (paper Sec. III-C): layers of particles are injected each time the previous
@@ -249,6 +250,11 @@ pub struct Inlet {
     pub stop_s: Option<f64>,
     /// How the nozzle moves (stitching patterns, Fig. 9).
     pub motion: Option<NozzleMotion>,
+    /// Largest sideways offset of a layer from the nozzle axis (m), drawn per layer from a
+    /// fixed pseudo-random sequence: the nozzle's wobble. A jet that is symmetric to round-off
+    /// buckles only after many seconds; a real jet always carries such noise.
+    #[serde(default)]
+    pub wobble_m: f64,
 }
 
 #[derive(Debug, Clone, Deserialize, PartialEq)]
@@ -344,7 +350,10 @@ impl Scene {
         if cells > 2.0e8 {
             return err(
                 "domain",
-                format!("needs {cells:.3e} grid cells of edge h = {} m; shrink the domain or coarsen the spacing", self.support_radius()),
+                format!(
+                    "needs {cells:.3e} grid cells of edge h = {} m; shrink the domain or coarsen the spacing",
+                    self.support_radius()
+                ),
             );
         }
         let inside = |p: [f64; 3]| (0..3).all(|a| p[a] >= d.min_m[a] && p[a] <= d.max_m[a]);
@@ -406,12 +415,29 @@ impl Scene {
                     positive(&field("nozzle.depth_m"), depth_m)?;
                 }
             }
+            if !(inlet.wobble_m >= 0.0 && inlet.wobble_m < self.material.particle_spacing_m) {
+                return err(
+                    &field("wobble_m"),
+                    format!("must be at least 0 and below the particle spacing, got {}", inlet.wobble_m),
+                );
+            }
             let n2: f64 = inlet.direction.iter().map(|c| c * c).sum();
             if !(n2 > 0.0 && n2.is_finite()) {
                 return err(&field("direction"), "must be a non-zero vector".into());
             }
             if !inside(inlet.position_m) {
                 return err(&field("position_m"), format!("{:?} lies outside the domain box", inlet.position_m));
+            }
+            let d = inlet.direction.map(|c| c / n2.sqrt());
+            let tube_start = [0, 1, 2].map(|a| inlet.position_m[a] - self.support_radius() * d[a]);
+            if !inside(tube_start) {
+                return err(
+                    &field("position_m"),
+                    format!(
+                        "the nozzle's tube reaches one support radius ({} m) upstream of the exit, to {tube_start:?}, outside the domain box; move the nozzle or enlarge the domain",
+                        self.support_radius()
+                    ),
+                );
             }
             if let Some(NozzleMotion::Waypoints { waypoints }) = &inlet.motion {
                 if waypoints.is_empty() {

@@ -18,11 +18,7 @@ fn lattice(min: [f64; 3], s: f64, lo: [i64; 3], hi: [i64; 3], mut keep: impl FnM
         for j in lo[1]..hi[1] {
             for i in lo[0]..hi[0] {
                 if keep([i, j, k]) {
-                    out.push([
-                        min[0] + (i as f64 + 0.5) * s,
-                        min[1] + (j as f64 + 0.5) * s,
-                        min[2] + (k as f64 + 0.5) * s,
-                    ]);
+                    out.push([min[0] + (i as f64 + 0.5) * s, min[1] + (j as f64 + 0.5) * s, min[2] + (k as f64 + 0.5) * s]);
                 }
             }
         }
@@ -111,9 +107,9 @@ fn overlap(boundary: &[[f64; 3]], fluid: &[[f64; 3]], s: f64) -> Option<[f64; 3]
         (-1..=1).any(|dz| {
             (-1..=1).any(|dy| {
                 (-1..=1).any(|dx| {
-                    cells.get(&[c[0] + dx, c[1] + dy, c[2] + dz]).is_some_and(|v| {
-                        v.iter().any(|b| (0..3).map(|a| (b[a] - f[a]).powi(2)).sum::<f64>() < limit2)
-                    })
+                    cells
+                        .get(&[c[0] + dx, c[1] + dy, c[2] + dz])
+                        .is_some_and(|v| v.iter().any(|b| (0..3).map(|a| (b[a] - f[a]).powi(2)).sum::<f64>() < limit2))
                 })
             })
         })

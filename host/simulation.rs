@@ -12,6 +12,7 @@ use crate::time_step::{Limit, StabilityBound, TimeStepper};
 use coil_kernels::density::{density_pass, DensityArgs};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::{leapfrog_pass, LeapfrogArgs};
+use coil_kernels::nozzle::{nozzle_pass, NozzleArgs, NozzleTube};
 use coil_kernels::smoothing::SmoothingKernels;
 use coil_kernels::view::View;
 use coil_kernels::{Real, Vec3};
@@ -99,8 +100,7 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         let h = scene.support_radius();
         let s = mat.particle_spacing_m;
         let mass = calibrated_mass(mat.rest_density_kg_m3, s, h);
-        let inlets: Vec<Inlet> =
-            scene.inlets.iter().map(|c| Inlet::new(c, s, mass, mat.rest_density_kg_m3)).collect();
+        let inlets: Vec<Inlet> = scene.inlets.iter().map(|c| Inlet::new(c, s, h, mass, mat.rest_density_kg_m3)).collect();
         let fluid_capacity = scene.simulation.max_fluid_particles.unwrap_or(0).max(initial.fluid.len());
         let boundary_count = initial.boundary.len();
         let mut particles = Particles::with_capacity(boundary_count + fluid_capacity, M::USES_STRESS);
@@ -131,7 +131,8 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         let diagonal = (0..3).map(|a| (d.max_m[a] - d.min_m[a]).powi(2)).sum::<f64>().sqrt();
         let g_norm = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
         let jet = inlets.iter().map(Inlet::speed).fold(0.0, f64::max);
-        let initial_speed = initial.fluid_velocity.iter().map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()).fold(0.0, f64::max);
+        let initial_speed =
+            initial.fluid_velocity.iter().map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()).fold(0.0, f64::max);
         let runaway_speed = 2.0 * ((2.0 * g_norm * diagonal).sqrt() + jet.max(initial_speed)) + mat.sound_speed_m_s;
         let mut sim = Self {
             particles,
@@ -177,6 +178,11 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         self.grid.neighborhood(self.particles.position_view())
     }
 
+    /// Each inlet's nozzle tube now.
+    pub fn inlet_tubes(&self) -> impl Iterator<Item = NozzleTube<R>> + '_ {
+        self.inlets.iter().map(|inlet| inlet.tube(self.time))
+    }
+
     /// dt for the next step and what limits it.
     pub fn next_dt(&self) -> (f64, Limit) {
         self.stepper.next(self.diagnostics.max_speed)
@@ -202,6 +208,18 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         let n = p.len();
         // Lines 9-16: velocity gradient and stress, accelerations.
         self.model.accelerations(&self.grid, &self.fluid, p);
+        // Fluid inside a nozzle's tube moves with the jet (paper Sec. III-C; see `nozzle`).
+        for inlet in &self.inlets {
+            let args = NozzleArgs {
+                fluid: self.fluid,
+                tube: inlet.tube(self.time),
+                id: View::new(&p.id[..n]),
+                position: vec3_view(&p.position, n),
+                acceleration: vec3_view_mut(&mut p.acceleration, n),
+                velocity_half: vec3_view_mut(&mut p.velocity_half, n),
+            };
+            launch(n, |i| nozzle_pass(i, &args));
+        }
         // Lines 17-19: leap-frog.
         let kick_dt = match self.previous_dt {
             Some(prev) => 0.5 * (prev + dt),

@@ -55,22 +55,53 @@ fn delivered_mass_rate(text: &str, nominal_area: f64) {
 }
 
 fn layer_size(scene: &coil::scene::Scene) -> f64 {
-    let inlet = coil::inlet::Inlet::new(&scene.inlets[0], scene.material.particle_spacing_m, 1.0, 1.0);
+    let inlet = coil::inlet::Inlet::new(&scene.inlets[0], scene.material.particle_spacing_m, scene.support_radius(), 1.0, 1.0);
     inlet.layer_size() as f64
 }
 
 #[test]
 fn circular_inlet_delivers_rho0_area_speed() {
     let r = 0.007;
-    delivered_mass_rate(&jet_scene(&format!("nozzle = {{ shape = \"circle\", radius_m = {r} }}"), ""), std::f64::consts::PI * r * r);
+    delivered_mass_rate(
+        &jet_scene(&format!("nozzle = {{ shape = \"circle\", radius_m = {r} }}"), ""),
+        std::f64::consts::PI * r * r,
+    );
 }
 
 #[test]
 fn rectangular_inlet_delivers_rho0_area_speed() {
-    delivered_mass_rate(
-        &jet_scene("nozzle = { shape = \"rectangle\", width_m = 0.013, depth_m = 0.005 }", ""),
-        0.013 * 0.005,
-    );
+    delivered_mass_rate(&jet_scene("nozzle = { shape = \"rectangle\", width_m = 0.013, depth_m = 0.005 }", ""), 0.013 * 0.005);
+}
+
+#[test]
+fn the_nozzle_tube_pushes_the_jet_at_its_speed_when_the_jet_is_blocked() {
+    // A plate 3 support radii below the exit stops the jet; the fluid in the tube still moves at
+    // exactly the jet velocity, so the layers keep their spacing and the flow rate holds.
+    let text =
+        jet_scene("nozzle = { shape = \"circle\", radius_m = 0.006 }", "[[boundary]]\nshape = \"plate\"\nheight_m = -0.012")
+            .replace("nu0_m2_s = 0.001", "nu0_m2_s = 0.01");
+    let scene = common::scene(&text);
+    let initial = initial_particles(&scene, "jet.toml").expect("valid");
+    let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.01 }));
+    while sim.time < 0.1 {
+        sim.step().expect("stable");
+    }
+    let tube = sim.inlet_tubes().next().expect("one inlet");
+    let p = &sim.particles;
+    let x = p.position_view();
+    let inside: Vec<usize> = (0..p.len()).filter(|&i| !sim.fluid.is_boundary(p.id[i]) && tube.contains(x.at(i))).collect();
+    // The tube is h = 0.004 m long and layers are about one spacing (0.002 m) apart: whole
+    // layers, two or three of them, none crushed together.
+    let layers = inside.len() as f64 / layer_size(&scene);
+    assert!(layers.fract() == 0.0 && (2.0..=3.0).contains(&layers), "{layers} layers in the tube");
+    for &i in &inside {
+        let v = [p.velocity[0][i], p.velocity[1][i], p.velocity[2][i]];
+        assert_eq!(v, [0.0, -0.5, 0.0], "particle {i} in the tube");
+    }
+    // Below the exit the jet has slowed down against the plate.
+    let slowest =
+        (0..p.len()).filter(|&i| !sim.fluid.is_boundary(p.id[i])).map(|i| p.velocity[1][i].abs()).fold(f64::INFINITY, f64::min);
+    assert!(slowest < 0.25, "the plate stops the jet (slowest {slowest} m/s)");
 }
 
 #[test]
@@ -81,7 +112,7 @@ fn inlet_stops_at_the_particle_budget_and_moving_nozzle_follows_waypoints() {
     )
     .replace("max_fluid_particles = 200000", "max_fluid_particles = 500");
     let scene = common::scene(&text);
-    let inlet = coil::inlet::Inlet::new(&scene.inlets[0], 0.002, 1.0, 1.0);
+    let inlet = coil::inlet::Inlet::new(&scene.inlets[0], 0.002, 0.004, 1.0, 1.0);
     let (mid, v) = inlet.nozzle(0.05);
     assert!((mid[0] - 0.01).abs() < 1e-12 && (v[0] - 0.2).abs() < 1e-12);
     assert_eq!(inlet.nozzle(0.5).0, [0.02, 0.0, 0.0], "held at the last waypoint");

@@ -155,3 +155,26 @@ fn slow_motion_is_not_rounded_away_f32() {
 fn slow_motion_is_not_rounded_away_f64() {
     motion_is_kept::<f64>();
 }
+
+#[test]
+fn nozzle_tube_contains_its_bore_upstream_of_the_exit() {
+    use coil_kernels::nozzle::NozzleTube;
+    // A jet along -y, exit at y = 1 m; across axes x and z.
+    let tube = |round: u32, half_extent: [f64; 2]| NozzleTube::<f32> {
+        exit: [0.0, 1.0, 0.0],
+        axis: [0.0, -1.0, 0.0],
+        across: [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+        half_extent,
+        round,
+        length: 0.1,
+        velocity: [0.0, -1.0, 0.0],
+    };
+    let round = tube(1, [0.05, 0.05]);
+    assert!(round.contains([0.03, 1.05, 0.03]), "inside the bore, upstream of the exit");
+    assert!(!round.contains([0.04, 1.05, 0.04]), "outside the circle, inside its square");
+    assert!(!round.contains([0.0, 0.99, 0.0]), "below the exit: free jet");
+    assert!(!round.contains([0.0, 1.11, 0.0]), "above the tube");
+    let rectangle = tube(0, [0.05, 0.01]);
+    assert!(rectangle.contains([0.049, 1.05, -0.009]));
+    assert!(!rectangle.contains([0.0, 1.05, 0.011]), "beyond the half depth");
+}

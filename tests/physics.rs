@@ -71,10 +71,8 @@ fn velocity_gradient_of_a_linear_field_in_the_interior() {
 #[test]
 fn pressure_and_viscous_forces_conserve_momentum() {
     // A jittered block in free space: no walls, no gravity, every pair force inside the set.
-    let text = common::box_scene(0.01, [0.1; 3], [0.1; 3], "").replace(
-        "[[boundary]]\nshape = \"box\"\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [0.1, 0.1, 0.1]\n",
-        "",
-    );
+    let text = common::box_scene(0.01, [0.1; 3], [0.1; 3], "")
+        .replace("[[boundary]]\nshape = \"box\"\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [0.1, 0.1, 0.1]\n", "");
     let cross = Cross { nu0: 0.5, nu_inf: 0.05, k: 1.0, n: 1.0 };
     let mut sim = simulation(&text, StressModel(cross));
     assert_eq!(sim.boundary_count(), 0);

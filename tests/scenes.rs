@@ -47,7 +47,11 @@ fn bad_scenes_exit_2_naming_file_and_field() {
         ("cross_n = 1.0", "cross_n = 0.0", "material.viscosity.cross_n"),
         ("cross_n = 1.0", "cross_nn = 1.0", "cross_nn"),
         ("particle_spacing_m = 0.02", "particle_spacing_m = 0.0", "material.particle_spacing_m"),
-        ("max_m = [0.4, 0.4, 0.4]", "max_m = [0.4, 0.4, 0.4]\n[[fluid_block]]\nmin_m = [-0.1, 0.0, 0.0]\nmax_m = [0.0, 0.1, 0.1]", "fluid_block[1]"),
+        (
+            "max_m = [0.4, 0.4, 0.4]",
+            "max_m = [0.4, 0.4, 0.4]\n[[fluid_block]]\nmin_m = [-0.1, 0.0, 0.0]\nmax_m = [0.0, 0.1, 0.1]",
+            "fluid_block[1]",
+        ),
     ];
     for (k, (from, to, field)) in cases.iter().enumerate() {
         assert!(good.contains(from), "{from}");
@@ -68,7 +72,10 @@ fn bad_scenes_exit_2_naming_file_and_field() {
 fn a_short_run_writes_a_frame_series() {
     let dir = std::env::temp_dir().join(format!("coil-run-{}", std::process::id()));
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
-    let text = std::fs::read_to_string(scene).expect("scene").replace("end_time_s = 1.0", "end_time_s = 0.004").replace("every_s = 0.02", "every_s = 0.002");
+    let text = std::fs::read_to_string(scene)
+        .expect("scene")
+        .replace("end_time_s = 1.0", "end_time_s = 0.004")
+        .replace("every_s = 0.02", "every_s = 0.002");
     std::fs::create_dir_all(&dir).expect("temp dir");
     let path = dir.join("short.toml");
     std::fs::write(&path, text).expect("write");

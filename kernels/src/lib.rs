@@ -7,7 +7,8 @@
 //! Per step: [`cell_grid::hash_pass`], the [`counting_sort`] stages and a gather of every
 //! particle field, [`density::density_pass`] (Eq. 5, 6), [`velocity_gradient::stress_pass`]
 //! (Eq. 8, 2, 3; the paper's operator only), [`acceleration::acceleration_pass`] (Eq. 7, 9 or
-//! Müller's Laplacian, gravity) and [`leapfrog::leapfrog_pass`].
+//! Müller's Laplacian, gravity), [`nozzle::nozzle_pass`] (jet scenes only) and
+//! [`leapfrog::leapfrog_pass`].
 #![no_std]
 #![cfg_attr(target_arch = "nvptx64", feature(abi_ptx, link_llvm_intrinsics, stdarch_nvptx))]
 // `link_llvm_intrinsics` is how the device reaches NVVM's fast math (see `real`).
@@ -23,6 +24,7 @@ pub mod cross_viscosity;
 pub mod density;
 pub mod fluid;
 pub mod leapfrog;
+pub mod nozzle;
 pub mod real;
 pub mod smoothing;
 pub mod vec3;

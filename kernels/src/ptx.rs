@@ -8,6 +8,7 @@ use crate::counting_sort::{chunk_total, count_particle, gather, scan_chunk, scat
 use crate::cross_viscosity::{Cross, Newtonian};
 use crate::density::{density_pass, DensityArgs};
 use crate::leapfrog::{leapfrog_pass, LeapfrogArgs};
+use crate::nozzle::{nozzle_pass, NozzleArgs};
 use crate::velocity_gradient::{stress_pass, StressArgs};
 use crate::view::{View, ViewMut};
 use core::arch::nvptx;
@@ -64,6 +65,8 @@ per_index_kernel!(
     AccelerationArgs<'static, f64, VelocityLaplacian<'static, f64>>,
     acceleration_pass::<f64, VelocityLaplacian<'static, f64>>
 );
+per_index_kernel!(nozzle_f32, NozzleArgs<'static, f32>, nozzle_pass::<f32>);
+per_index_kernel!(nozzle_f64, NozzleArgs<'static, f64>, nozzle_pass::<f64>);
 per_index_kernel!(leapfrog_f32, LeapfrogArgs<'static, f32>, leapfrog_pass::<f32>);
 per_index_kernel!(leapfrog_f64, LeapfrogArgs<'static, f64>, leapfrog_pass::<f64>);
 

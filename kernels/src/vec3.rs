@@ -155,14 +155,7 @@ impl<R: Real> SymTensor<R> {
 
     #[inline(always)]
     pub fn scaled(self, s: R) -> Self {
-        Self {
-            xx: self.xx * s,
-            yy: self.yy * s,
-            zz: self.zz * s,
-            xy: self.xy * s,
-            xz: self.xz * s,
-            yz: self.yz * s,
-        }
+        Self { xx: self.xx * s, yy: self.yy * s, zz: self.zz * s, xy: self.xy * s, xz: self.xz * s, yz: self.yz * s }
     }
 
     #[inline(always)]
