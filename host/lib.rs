@@ -8,6 +8,7 @@ pub mod parallel;
 pub mod particles;
 pub mod run;
 pub mod scene;
+pub mod scene_override;
 pub mod setup;
 pub mod simulation;
 pub mod time_step;

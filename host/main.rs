@@ -3,7 +3,8 @@
 use clap::{Parser, Subcommand, ValueEnum};
 use coil::run::{run, RunError, RunOptions};
 use coil::scene::{Precision, Scene};
-use std::path::PathBuf;
+use coil::scene_override::Override;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 /// SPH simulation of viscous and shear-thinning liquids that buckle, coil and fold
@@ -21,6 +22,11 @@ enum Command {
     Run {
         /// Scene file (TOML), e.g. scenes/round_jet.toml.
         scene: PathBuf,
+        /// Override a scene field, validated like the file: KEY is the dotted path as the file
+        /// spells it, e.g. --set material.viscosity.cross_k_s=10 --set inlet[0].speed_m_s=0.5.
+        /// Repeatable; applied in order.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
         /// Output folder [default: out/<scene name>].
         #[arg(long)]
         out: Option<PathBuf>,
@@ -34,6 +40,12 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
+    /// List the shipped scenes, one line each, with what each reproduces.
+    Scenes {
+        /// Folder of scene files.
+        #[arg(default_value = "scenes")]
+        dir: PathBuf,
+    },
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -45,7 +57,8 @@ enum PrecisionArg {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Run { scene, out, precision, threads, quiet } => {
+        Command::Scenes { dir } => list_scenes(&dir),
+        Command::Run { scene, set, out, precision, threads, quiet } => {
             if let Some(t) = threads {
                 if t == 0 {
                     eprintln!("error: --threads: must be at least 1");
@@ -57,7 +70,14 @@ fn main() -> ExitCode {
                 }
             }
             let file = scene.display().to_string();
-            let parsed = match Scene::load(&scene) {
+            let overrides = match set.iter().map(|o| Override::parse(o)).collect::<Result<Vec<_>, _>>() {
+                Ok(o) => o,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(2);
+                }
+            };
+            let parsed = match Scene::load_with(&scene, &overrides) {
                 Ok(s) => s,
                 Err(e) => {
                     eprintln!("error: {e}");
@@ -89,4 +109,29 @@ fn main() -> ExitCode {
             }
         }
     }
+}
+
+/// `coil scenes`: every scene file in `dir` with its name and description.
+fn list_scenes(dir: &Path) -> ExitCode {
+    let entries = match std::fs::read_dir(dir) {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("error: {}: cannot be read: {e} (run from the repository root, or give the scenes folder)", dir.display());
+            return ExitCode::from(2);
+        }
+    };
+    let mut paths: Vec<PathBuf> =
+        entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|x| x == "toml")).collect();
+    paths.sort();
+    let mut status = ExitCode::SUCCESS;
+    for path in paths {
+        match Scene::load(&path) {
+            Ok(scene) => println!("{:<28} {}", path.display(), scene.description),
+            Err(e) => {
+                eprintln!("error: {e}");
+                status = ExitCode::from(2);
+            }
+        }
+    }
+    status
 }

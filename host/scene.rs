@@ -2,6 +2,7 @@
 //! (`deny_unknown_fields`), validated once at load, then turned into plain `Copy` parameter
 //! structs for the kernels.
 
+use crate::scene_override::{self, Override};
 use serde::Deserialize;
 use std::fmt;
 use std::path::Path;
@@ -276,6 +277,26 @@ impl Scene {
             reason: format!("cannot be read: {e}"),
         })?;
         Self::parse(&text, &file)
+    }
+
+    /// Reads a scene file, applies `--set` overrides in order, and validates the result as one.
+    pub fn load_with(path: &Path, overrides: &[Override]) -> Result<Scene, SceneError> {
+        if overrides.is_empty() {
+            return Self::load(path);
+        }
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+            file: file.clone(),
+            field: "(file)".into(),
+            reason: format!("cannot be read: {e}"),
+        })?;
+        Self::parse(&scene_override::apply(&text, &file, overrides)?, &format!("{file} with --set")).map_err(|mut e| {
+            // Line numbers would point into the rewritten text, not the user's file.
+            if let Some(at) = e.reason.find(" (at line ") {
+                e.reason.truncate(at);
+            }
+            e
+        })
     }
 
     /// Parses and validates scene text; `file` names it in errors.

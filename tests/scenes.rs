@@ -89,3 +89,56 @@ fn a_short_run_writes_a_frame_series() {
     assert!(!dir.join("out").read_dir().expect("out").any(|e| e.expect("entry").path().extension().is_some_and(|x| x == "tmp")));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn a_nozzle_wobbling_a_spacing_or_a_tube_outside_the_domain_is_refused() {
+    let good = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/round_jet.toml")).expect("scene");
+    let cases = [
+        ("wobble_m = 0.001", "wobble_m = 0.004", "inlet[0].wobble_m", "below the particle spacing"),
+        ("wobble_m = 0.001", "wobble_m = -0.001", "inlet[0].wobble_m", "at least 0"),
+        // The exit is inside the domain (top at 0.23 m) but the tube, h = 0.008 m long, is not.
+        ("position_m = [0.0, 0.2, 0.0]", "position_m = [0.0, 0.225, 0.0]", "inlet[0].position_m", "tube"),
+    ];
+    for (from, to, field, reason) in cases {
+        assert!(good.contains(from), "{from}");
+        let e = Scene::parse(&good.replacen(from, to, 1), "jet.toml").expect_err(to);
+        assert!(e.file == "jet.toml" && e.field == field && e.reason.contains(reason), "{to}: {e}");
+    }
+}
+
+#[test]
+fn set_overrides_any_field_with_the_files_validation() {
+    use coil::scene_override::Override;
+    let jet = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/round_jet.toml");
+    let sets = |given: &[&str]| given.iter().map(|g| Override::parse(g).expect(g)).collect::<Vec<_>>();
+    let scene = Scene::load_with(
+        &jet,
+        &sets(&[
+            "material.viscosity.cross_k_s=10",
+            "inlet[0].speed_m_s = 0.5",
+            "simulation.precision=f64",
+            "output.every_steps=7",
+        ]),
+    )
+    .expect("valid overrides");
+    assert_eq!(scene.material.viscosity.cross_k_s, 10.0);
+    assert_eq!(scene.inlets[0].speed_m_s, 0.5);
+    assert_eq!(scene.simulation.precision, coil::scene::Precision::F64);
+    assert_eq!(scene.output.every_steps, Some(7));
+    let untouched = Scene::load(&jet).expect("valid");
+    assert_eq!(scene.material.particle_spacing_m, untouched.material.particle_spacing_m);
+
+    // The same checks as the file: a bad value, a misspelled field, a missing list entry.
+    let cases: [(&str, &str); 4] = [
+        ("material.viscosity.nu0_m2_s=-1", "material.viscosity.nu0_m2_s"),
+        ("material.viscosity.cross_kk=1", "cross_kk"),
+        ("inlet[3].speed_m_s=1", "inlet[3].speed_m_s"),
+        ("material.sound_speed_m_s", "material.sound_speed_m_s"),
+    ];
+    for (given, field) in cases {
+        let e = Override::parse(given).and_then(|o| Scene::load_with(&jet, &[o])).expect_err(given);
+        assert!(e.to_string().contains(field), "{given}: {e}");
+    }
+    let out = coil(&["run", jet.to_str().expect("utf-8"), "--set", "material.particle_spacing_m=0", "--quiet"]);
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+}
