@@ -6,6 +6,7 @@ pub mod neighbor_grid;
 pub mod output;
 pub mod parallel;
 pub mod particles;
+pub mod preview;
 pub mod run;
 pub mod scene;
 pub mod scene_override;

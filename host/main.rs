@@ -1,6 +1,8 @@
 //! The `coil` command line.
 
 use clap::{Parser, Subcommand, ValueEnum};
+use coil::output::vtu_read::read_frame;
+use coil::preview::{frame_path, render_frame, Coloring, View};
 use coil::run::{run, RunError, RunOptions};
 use coil::scene::{Precision, Scene};
 use coil::scene_override::Override;
@@ -40,12 +42,46 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
+    /// Render a frame to a PNG: orthographic, coloured by viscosity (as the paper's figures) or
+    /// speed, with a colour bar.
+    Preview {
+        /// A frame (.vtu) or an output folder (its last frame).
+        frame: PathBuf,
+        /// Camera: side (along -z), top (along -y) or both.
+        #[arg(long, value_enum, default_value = "both")]
+        view: ViewArg,
+        /// What the colours show.
+        #[arg(long, value_enum, default_value = "viscosity")]
+        color: ColorArg,
+        /// Colour range MIN,MAX [default: the frame's own range; 0 to the top speed].
+        #[arg(long, value_delimiter = ',', num_args = 2, value_name = "MIN,MAX")]
+        range: Option<Vec<f64>>,
+        /// Pixels per panel side.
+        #[arg(long, default_value_t = 600)]
+        size: usize,
+        /// PNG to write [default: the frame's name with .png].
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
     /// List the shipped scenes, one line each, with what each reproduces.
     Scenes {
         /// Folder of scene files.
         #[arg(default_value = "scenes")]
         dir: PathBuf,
     },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ViewArg {
+    Side,
+    Top,
+    Both,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ColorArg {
+    Viscosity,
+    Speed,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -58,6 +94,27 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Scenes { dir } => list_scenes(&dir),
+        Command::Preview { frame, view, color, range, size, output } => {
+            let view = match view {
+                ViewArg::Side => View::Side,
+                ViewArg::Top => View::Top,
+                ViewArg::Both => View::Both,
+            };
+            let coloring = match color {
+                ColorArg::Viscosity => Coloring::Viscosity,
+                ColorArg::Speed => Coloring::Speed,
+            };
+            match preview(&frame, view, coloring, range.map(|r| (r[0], r[1])), size, output) {
+                Ok(png) => {
+                    println!("{}", png.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
+                }
+            }
+        }
         Command::Run { scene, set, out, precision, threads, quiet } => {
             if let Some(t) = threads {
                 if t == 0 {
@@ -134,4 +191,24 @@ fn list_scenes(dir: &Path) -> ExitCode {
         }
     }
     status
+}
+
+/// `coil preview`: renders the frame `path` names and returns the PNG written.
+fn preview(
+    path: &Path,
+    view: View,
+    coloring: Coloring,
+    range: Option<(f64, f64)>,
+    size: usize,
+    output: Option<PathBuf>,
+) -> Result<PathBuf, String> {
+    if !(16..=8192).contains(&size) {
+        return Err(format!("--size: must be 16 to 8192 pixels, got {size}"));
+    }
+    let file = frame_path(path)?;
+    let frame = read_frame(&file)?;
+    let image = render_frame(&frame, view, coloring, range, size).map_err(|e| format!("{}: {e}", file.display()))?;
+    let png = output.unwrap_or_else(|| file.with_extension("png"));
+    image.save(&png).map_err(|e| format!("{}: cannot be written: {e}", png.display()))?;
+    Ok(png)
 }

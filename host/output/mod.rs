@@ -1,6 +1,7 @@
 //! Frames: one VTK XML `.vtu` per frame plus a `.pvd` series that ParaView opens.
 
 pub mod vtu;
+pub mod vtu_read;
 
 use std::io;
 use std::path::{Path, PathBuf};

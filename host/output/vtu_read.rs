@@ -1,0 +1,108 @@
+//! Reads back the `.vtu` frames that `vtu::encode` writes (appended raw binary, UInt64 block
+//! headers), for `coil preview` and the round-trip test. Other VTK writers' files are refused
+//! with a reason rather than misread.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// The particles of one frame.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FrameData {
+    /// m
+    pub position: Vec<[f64; 3]>,
+    /// Per-particle scalars by name (`density`, `pressure`, `viscosity`, `shear_rate`).
+    pub scalars: BTreeMap<String, Vec<f32>>,
+    /// Per-particle vectors by name (`velocity`).
+    pub vectors: BTreeMap<String, Vec<[f32; 3]>>,
+    pub id: Vec<u32>,
+}
+
+struct ArrayHeader {
+    ty: String,
+    name: String,
+    components: usize,
+    offset: usize,
+}
+
+fn attribute(tag: &str, name: &str) -> Option<String> {
+    let start = tag.find(&format!(" {name}=\""))? + name.len() + 3;
+    let end = start + tag[start..].find('"')?;
+    Some(tag[start..end].to_string())
+}
+
+/// Reads a frame file; the error says why it cannot be read.
+pub fn read_frame(path: &Path) -> Result<FrameData, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("{}: cannot be read: {e}", path.display()))?;
+    parse(&bytes).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Parses the bytes of a frame file.
+pub fn parse(bytes: &[u8]) -> Result<FrameData, String> {
+    let marker = b"<AppendedData encoding=\"raw\">";
+    let at = bytes
+        .windows(marker.len())
+        .position(|w| w == marker)
+        .ok_or("not a coil frame: no raw appended data (was it written by coil?)")?;
+    let header = std::str::from_utf8(&bytes[..at]).map_err(|_| "header is not UTF-8")?;
+    if !header.contains("header_type=\"UInt64\"") {
+        return Err("not a coil frame: block headers are not UInt64".into());
+    }
+    let underscore = bytes[at..].iter().position(|&b| b == b'_').ok_or("appended data has no '_' start")?;
+    let data = &bytes[at + underscore + 1..];
+    let n: usize = header
+        .find("<Piece ")
+        .and_then(|p| attribute(&header[p..], "NumberOfPoints"))
+        .and_then(|v| v.parse().ok())
+        .ok_or("no NumberOfPoints")?;
+    let arrays: Vec<ArrayHeader> = header
+        .split("<DataArray")
+        .skip(1)
+        .map(|tag| {
+            let tag = &tag[..tag.find('>').unwrap_or(tag.len())];
+            Ok(ArrayHeader {
+                ty: attribute(tag, "type").ok_or("DataArray without type")?,
+                name: attribute(tag, "Name").ok_or("DataArray without Name")?,
+                components: attribute(tag, "NumberOfComponents").and_then(|c| c.parse().ok()).unwrap_or(1),
+                offset: attribute(tag, "offset").and_then(|c| c.parse().ok()).ok_or("DataArray without offset")?,
+            })
+        })
+        .collect::<Result<_, &str>>()?;
+    let block = |a: &ArrayHeader, size: usize| -> Result<&[u8], String> {
+        let len_bytes = data.get(a.offset..a.offset + 8).ok_or(format!("array {} lies past the end of the file", a.name))?;
+        let len = u64::from_le_bytes(len_bytes.try_into().expect("8 bytes")) as usize;
+        if len != n * a.components * size {
+            return Err(format!("array {} holds {len} bytes, expected {}", a.name, n * a.components * size));
+        }
+        data.get(a.offset + 8..a.offset + 8 + len).ok_or(format!("array {} is truncated", a.name))
+    };
+    let mut frame = FrameData::default();
+    for a in &arrays {
+        match (a.ty.as_str(), a.name.as_str(), a.components) {
+            ("Float64", "position", 3) => {
+                frame.position = block(a, 8)?
+                    .chunks_exact(24)
+                    .map(|c| [0, 1, 2].map(|k| f64::from_le_bytes(c[8 * k..8 * k + 8].try_into().expect("8 bytes"))))
+                    .collect();
+            }
+            ("Float32", name, 1) => {
+                let v = block(a, 4)?.chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().expect("4 bytes"))).collect();
+                frame.scalars.insert(name.to_string(), v);
+            }
+            ("Float32", name, 3) => {
+                let v = block(a, 4)?
+                    .chunks_exact(12)
+                    .map(|c| [0, 1, 2].map(|k| f32::from_le_bytes(c[4 * k..4 * k + 4].try_into().expect("4 bytes"))))
+                    .collect();
+                frame.vectors.insert(name.to_string(), v);
+            }
+            ("UInt32", "id", 1) => {
+                frame.id = block(a, 4)?.chunks_exact(4).map(|c| u32::from_le_bytes(c.try_into().expect("4 bytes"))).collect();
+            }
+            _ => {}
+        }
+    }
+    if frame.position.len() != n {
+        return Err("no Float64 position array".into());
+    }
+    Ok(frame)
+}

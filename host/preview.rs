@@ -1,0 +1,239 @@
+//! `coil preview`: particles rendered orthographically to a PNG, coloured like the paper's
+//! figures (viscosity from nu_inf to nu0) or by speed, with a colour bar.
+
+use crate::output::write_atomically;
+use std::path::Path;
+
+/// Which way the camera looks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum View {
+    /// Along -z: x to the right, y (up) up.
+    Side,
+    /// Along -y: x to the right, z down the picture.
+    Top,
+    /// Side and top next to each other.
+    Both,
+}
+
+/// An RGB picture.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Image {
+    pub width: usize,
+    pub height: usize,
+    /// Row-major RGB, 3 bytes a pixel.
+    pub pixels: Vec<u8>,
+}
+
+const BACKGROUND: [u8; 3] = [255, 255, 255];
+const INK: [u8; 3] = [40, 40, 40];
+const BAR_WIDTH: usize = 110;
+
+impl Image {
+    fn new(width: usize, height: usize) -> Self {
+        Self { width, height, pixels: BACKGROUND.repeat(width * height) }
+    }
+
+    fn put(&mut self, x: i64, y: i64, c: [u8; 3]) {
+        if x >= 0 && y >= 0 && (x as usize) < self.width && (y as usize) < self.height {
+            let k = 3 * (y as usize * self.width + x as usize);
+            self.pixels[k..k + 3].copy_from_slice(&c);
+        }
+    }
+
+    fn disc(&mut self, cx: f64, cy: f64, r: f64, c: [u8; 3]) {
+        let ri = r.ceil() as i64;
+        let (x0, y0) = (cx.round() as i64, cy.round() as i64);
+        for dy in -ri..=ri {
+            for dx in -ri..=ri {
+                let (fx, fy) = ((x0 + dx) as f64 - cx, (y0 + dy) as f64 - cy);
+                if fx * fx + fy * fy <= r * r {
+                    self.put(x0 + dx, y0 + dy, c);
+                }
+            }
+        }
+    }
+
+    /// The picture as PNG bytes.
+    pub fn to_png(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        let mut encoder = png::Encoder::new(&mut out, self.width as u32, self.height as u32);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header().expect("writing to memory");
+        writer.write_image_data(&self.pixels).expect("writing to memory");
+        drop(writer);
+        out
+    }
+
+    /// Writes the PNG through a temporary name and a rename.
+    pub fn save(&self, path: &Path) -> std::io::Result<()> {
+        write_atomically(path, &self.to_png())
+    }
+}
+
+/// Viridis, sampled at five points: dark purple (low) to yellow (high), as in the paper's
+/// viscosity figures.
+fn colormap(t: f64) -> [u8; 3] {
+    const STOPS: [[f64; 3]; 5] =
+        [[68.0, 1.0, 84.0], [59.0, 82.0, 139.0], [33.0, 145.0, 140.0], [94.0, 201.0, 98.0], [253.0, 231.0, 37.0]];
+    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 };
+    let x = t * 4.0;
+    let k = (x.floor() as usize).min(3);
+    let f = x - k as f64;
+    [0, 1, 2].map(|c| (STOPS[k][c] + f * (STOPS[k + 1][c] - STOPS[k][c])).round() as u8)
+}
+
+/// 3 x 5 pixel glyphs for the colour bar's numbers, one row per 3 bits.
+fn glyph(c: char) -> [u8; 5] {
+    match c {
+        '0' => [7, 5, 5, 5, 7],
+        '1' => [2, 6, 2, 2, 7],
+        '2' => [7, 1, 7, 4, 7],
+        '3' => [7, 1, 7, 1, 7],
+        '4' => [5, 5, 7, 1, 1],
+        '5' => [7, 4, 7, 1, 7],
+        '6' => [7, 4, 7, 5, 7],
+        '7' => [7, 1, 1, 1, 1],
+        '8' => [7, 5, 7, 5, 7],
+        '9' => [7, 5, 7, 1, 7],
+        '.' => [0, 0, 0, 0, 2],
+        '-' => [0, 0, 7, 0, 0],
+        '+' => [0, 2, 7, 2, 0],
+        'e' => [0, 7, 7, 4, 7],
+        _ => [0; 5],
+    }
+}
+
+fn text(img: &mut Image, x: i64, y: i64, s: &str, scale: i64) {
+    for (k, ch) in s.chars().enumerate() {
+        let g = glyph(ch);
+        let left = x + k as i64 * 4 * scale;
+        for (row, bits) in g.iter().enumerate() {
+            for col in 0..3 {
+                if bits & (4 >> col) != 0 {
+                    for sy in 0..scale {
+                        for sx in 0..scale {
+                            img.put(left + col * scale + sx, y + row as i64 * scale + sy, INK);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Renders particles at `position` (m) coloured by `value` mapped from `range.0` (dark) to
+/// `range.1` (bright). Each panel is `size` pixels square; a colour bar with the range's numbers
+/// sits on the right.
+pub fn render(position: &[[f64; 3]], value: &[f32], range: (f64, f64), view: View, size: usize) -> Image {
+    let panels: &[View] = match view {
+        View::Side => &[View::Side],
+        View::Top => &[View::Top],
+        View::Both => &[View::Side, View::Top],
+    };
+    let mut img = Image::new(panels.len() * size + BAR_WIDTH, size);
+    // One scale for every panel, so sizes compare between views.
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in position {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f64::max).max(1e-9);
+    let margin = 0.06 * size as f64;
+    let scale = (size as f64 - 2.0 * margin) / extent;
+    let radius = (size as f64 / 260.0).max(1.0);
+    let (vmin, vmax) = range;
+    let span = if vmax > vmin { vmax - vmin } else { 1.0 };
+    let mut order: Vec<usize> = (0..position.len()).collect();
+    for (k, panel) in panels.iter().enumerate() {
+        // (horizontal axis, vertical axis, depth axis towards the camera, vertical flipped)
+        let (u, v, depth, up) = match panel {
+            View::Side => (0, 1, 2, true),
+            _ => (0, 2, 1, false),
+        };
+        // Far particles first, so near ones cover them; near ones are drawn brighter.
+        order.sort_by(|&a, &b| position[a][depth].total_cmp(&position[b][depth]));
+        let depth_span = (hi[depth] - lo[depth]).max(1e-9);
+        let centre = [0, 1, 2].map(|a| 0.5 * (lo[a] + hi[a]));
+        for &i in &order {
+            let p = position[i];
+            let x = k as f64 * size as f64 + 0.5 * size as f64 + (p[u] - centre[u]) * scale;
+            let dy = (p[v] - centre[v]) * scale;
+            let y = 0.5 * size as f64 + if up { -dy } else { dy };
+            let shade = 0.65 + 0.35 * (p[depth] - lo[depth]) / depth_span;
+            let c = colormap((value[i] as f64 - vmin) / span).map(|c| (c as f64 * shade) as u8);
+            img.disc(x, y, radius, c);
+        }
+    }
+    // Colour bar: bright at the top, with its top, middle and bottom values.
+    let bar_left = (panels.len() * size + 12) as i64;
+    let (top, bottom) = (margin as i64, size as i64 - margin as i64);
+    for y in top..=bottom {
+        let c = colormap((bottom - y) as f64 / (bottom - top).max(1) as f64);
+        for x in bar_left..bar_left + 18 {
+            img.put(x, y, c);
+        }
+    }
+    for (y, v) in [(top, vmax), ((top + bottom) / 2, 0.5 * (vmin + vmax)), (bottom - 9, vmin)] {
+        text(&mut img, bar_left + 24, y, &format!("{v:.2e}"), 2);
+    }
+    img
+}
+
+/// What the colours show.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Coloring {
+    /// Kinematic viscosity nu (m^2/s).
+    Viscosity,
+    /// |v| (m/s).
+    Speed,
+}
+
+/// The frame a path names: the file itself, or the last `frame_*.vtu` of a folder.
+pub fn frame_path(path: &Path) -> Result<std::path::PathBuf, String> {
+    if !path.is_dir() {
+        return Ok(path.to_path_buf());
+    }
+    let entries = std::fs::read_dir(path).map_err(|e| format!("{}: cannot be read: {e}", path.display()))?;
+    entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with("frame_") && n.ends_with(".vtu")))
+        .max()
+        .ok_or_else(|| format!("{}: holds no frame_*.vtu", path.display()))
+}
+
+/// Renders a frame file. `range` defaults to the frame's own smallest and largest value (for
+/// viscosity, nu_inf and nu0 wherever the flow reaches both), or 0 to the largest speed.
+pub fn render_frame(
+    frame: &crate::output::vtu_read::FrameData,
+    view: View,
+    coloring: Coloring,
+    range: Option<(f64, f64)>,
+    size: usize,
+) -> Result<Image, String> {
+    let value: Vec<f32> = match coloring {
+        Coloring::Viscosity => frame.scalars.get("viscosity").cloned().ok_or("the frame has no viscosity array")?,
+        Coloring::Speed => frame
+            .vectors
+            .get("velocity")
+            .ok_or("the frame has no velocity array")?
+            .iter()
+            .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
+            .collect(),
+    };
+    let range = range.unwrap_or_else(|| {
+        let max = value.iter().copied().fold(f32::NEG_INFINITY, f32::max) as f64;
+        let min = match coloring {
+            Coloring::Viscosity => value.iter().copied().fold(f32::INFINITY, f32::min) as f64,
+            Coloring::Speed => 0.0,
+        };
+        if min.is_finite() && max.is_finite() {
+            (min, max)
+        } else {
+            (0.0, 1.0)
+        }
+    });
+    Ok(render(&frame.position, &value, range, view, size))
+}

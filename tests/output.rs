@@ -1,0 +1,78 @@
+//! Frames read back as written; previews are pictures of the particles.
+
+use coil::output::vtu::{encode, Field};
+use coil::output::vtu_read::parse;
+use coil::preview::{render, render_frame, Coloring, View};
+
+fn cloud(n: usize) -> (Vec<[f64; 3]>, Vec<[f32; 3]>, Vec<f32>, Vec<u32>) {
+    // A helix, so side and top views differ.
+    let position = (0..n).map(|k| {
+        let t = k as f64 * 0.05;
+        [0.1 * t.cos(), 0.002 * t, 0.1 * t.sin()]
+    });
+    let velocity = (0..n).map(|k| [k as f32, -(k as f32), 0.5]);
+    let viscosity = (0..n).map(|k| 0.01 + 0.09 * k as f32 / n as f32);
+    (position.collect(), velocity.collect(), viscosity.collect(), (0..n as u32).map(|k| 7 * k + 3).collect())
+}
+
+#[test]
+fn a_frame_written_and_read_back_gives_the_same_particles() {
+    let (position, velocity, viscosity, id) = cloud(1000);
+    let mut bytes = Vec::new();
+    encode(
+        &position,
+        &[Field::Vector("velocity", &velocity), Field::Scalar("viscosity", &viscosity), Field::Id("id", &id)],
+        &mut bytes,
+    );
+    let frame = parse(&bytes).expect("own format");
+    // Bit for bit: positions are written as f64, the fields as the f32 they are.
+    assert_eq!(frame.position, position);
+    assert_eq!(frame.vectors["velocity"], velocity);
+    assert_eq!(frame.scalars["viscosity"], viscosity);
+    assert_eq!(frame.id, id);
+    let torn = &bytes[..bytes.len() / 2];
+    assert!(parse(torn).is_err(), "a torn file is refused, not misread");
+}
+
+#[test]
+fn preview_has_the_expected_size_and_shows_the_particles() {
+    let (position, velocity, viscosity, id) = cloud(2000);
+    let size = 200;
+    let image = render(&position, &viscosity, (0.01, 0.1), View::Both, size);
+    assert_eq!((image.width, image.height), (2 * size + 110, size));
+    let panel_ink = |left: usize| {
+        (0..size * size)
+            .filter(|&k| {
+                let (x, y) = (left + k % size, k / size);
+                image.pixels[3 * (y * image.width + x)..][..3] != [255, 255, 255]
+            })
+            .count()
+    };
+    // A helix of 2000 points covers a few % of each panel; a blank panel has no ink at all.
+    let (side, top) = (panel_ink(0), panel_ink(size));
+    assert!(side > size * size / 100 && top > size * size / 100, "side {side} top {top} inked pixels");
+    // Colour follows viscosity: the low end is dark purple, the high end yellow.
+    let distinct: std::collections::HashSet<&[u8]> = image.pixels.chunks(3).collect();
+    assert!(distinct.len() > 50, "{} colours", distinct.len());
+
+    // The PNG decodes to the same picture.
+    let png = image.to_png();
+    let decoder = png::Decoder::new(std::io::Cursor::new(png));
+    let mut reader = decoder.read_info().expect("valid PNG");
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).expect("a frame");
+    assert_eq!((info.width as usize, info.height as usize), (image.width, image.height));
+    assert_eq!(&buf[..info.buffer_size()], &image.pixels[..]);
+
+    // From a frame: coloured by speed as well.
+    let mut bytes = Vec::new();
+    encode(
+        &position,
+        &[Field::Vector("velocity", &velocity), Field::Scalar("viscosity", &viscosity), Field::Id("id", &id)],
+        &mut bytes,
+    );
+    let frame = parse(&bytes).expect("own format");
+    let by_speed = render_frame(&frame, View::Side, Coloring::Speed, None, size).expect("has velocity");
+    assert_eq!((by_speed.width, by_speed.height), (size + 110, size));
+    assert_ne!(by_speed.pixels, render_frame(&frame, View::Side, Coloring::Viscosity, None, size).expect("has viscosity").pixels);
+}
