@@ -41,6 +41,10 @@ enum Command {
         /// Print only the summary.
         #[arg(long)]
         quiet: bool,
+        /// Also write each frame as a PNG next to it (as `coil preview` draws it, coloured by
+        /// viscosity from nu_inf to nu0, or by speed for a Newtonian fluid).
+        #[arg(long)]
+        preview: bool,
     },
     /// Render a frame to a PNG: orthographic, coloured by viscosity (as the paper's figures) or
     /// speed, with a colour bar.
@@ -115,7 +119,7 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Run { scene, set, out, precision, threads, quiet } => {
+        Command::Run { scene, set, out, precision, threads, quiet, preview } => {
             if let Some(t) = threads {
                 if t == 0 {
                     eprintln!("error: --threads: must be at least 1");
@@ -148,6 +152,7 @@ fn main() -> ExitCode {
                     PrecisionArg::F64 => Precision::F64,
                 }),
                 quiet,
+                preview,
             };
             match run(&parsed, &file, &options) {
                 Ok(summary) => {

@@ -4,6 +4,7 @@ use crate::frame::Frame;
 use crate::model::{LaplacianModel, Model, StressModel};
 use crate::output::vtu::{encode, Field, Series};
 use crate::output::write_atomically;
+use crate::preview::{render, View};
 use crate::scene::{Precision, Scene, SceneError, ViscosityOperator};
 use crate::setup::{initial_particles, InitialParticles};
 use crate::simulation::{Instability, Simulation};
@@ -13,6 +14,9 @@ use std::fmt;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
+/// Pixels per panel of `--preview` pictures.
+const PREVIEW_SIZE: usize = 480;
+
 #[derive(Debug, Clone)]
 pub struct RunOptions {
     /// Folder for frames; created if missing.
@@ -21,6 +25,8 @@ pub struct RunOptions {
     pub precision: Option<Precision>,
     /// No progress lines.
     pub quiet: bool,
+    /// Also write each frame as a PNG (`coil preview`'s picture, both views).
+    pub preview: bool,
 }
 
 /// What a run did, printed at its end.
@@ -137,6 +143,19 @@ fn drive<R: Real, M: Model<R>>(
         let name = format!("frame_{:06}.vtu", *frames);
         let path = dir.join(&name);
         write_atomically(&path, frame.to_vtu()).map_err(|e| io_error("frame", &path, e))?;
+        if options.preview {
+            let v = &scene.material.viscosity;
+            // The paper's colouring, nu_inf to nu0; a Newtonian fluid has one colour, so speed.
+            let image = if v.nu_inf() < v.nu0_m2_s {
+                render(&frame.position, &frame.viscosity, (v.nu_inf(), v.nu0_m2_s), View::Both, PREVIEW_SIZE)
+            } else {
+                let speed: Vec<f32> = frame.velocity.iter().map(|u| (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt()).collect();
+                let top = speed.iter().copied().fold(0.0f32, f32::max).max(f32::MIN_POSITIVE) as f64;
+                render(&frame.position, &speed, (0.0, top), View::Both, PREVIEW_SIZE)
+            };
+            let png = path.with_extension("png");
+            image.save(&png).map_err(|e| io_error("preview", &png, e))?;
+        }
         series.push(sim.time, &name).map_err(|e| io_error("series", series.path(), e))?;
         *frames += 1;
         Ok(())

@@ -79,8 +79,22 @@ fn a_short_run_writes_a_frame_series() {
     std::fs::create_dir_all(&dir).expect("temp dir");
     let path = dir.join("short.toml");
     std::fs::write(&path, text).expect("write");
-    let out = coil(&["run", path.to_str().expect("utf-8"), "--out", dir.join("out").to_str().expect("utf-8"), "--quiet"]);
+    let out =
+        coil(&["run", path.to_str().expect("utf-8"), "--out", dir.join("out").to_str().expect("utf-8"), "--quiet", "--preview"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for k in 0..3 {
+        let png = std::fs::read(dir.join(format!("out/frame_{k:06}.png"))).expect("a preview per frame");
+        assert_eq!(&png[1..4], b"PNG");
+    }
+    let shown = coil(&[
+        "preview",
+        dir.join("out").to_str().expect("utf-8"),
+        "--view",
+        "top",
+        "-o",
+        dir.join("top.png").to_str().expect("utf-8"),
+    ]);
+    assert!(shown.status.success() && dir.join("top.png").is_file(), "{}", String::from_utf8_lossy(&shown.stderr));
     let pvd = std::fs::read_to_string(dir.join("out/dam_break.pvd")).expect("series");
     assert_eq!(pvd.matches("<DataSet").count(), 3, "frames at t = 0, 0.002, 0.004 s: {pvd}");
     let frame = std::fs::read(dir.join("out/frame_000002.vtu")).expect("frame");
