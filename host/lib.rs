@@ -8,6 +8,7 @@ pub mod parallel;
 pub mod particles;
 pub mod preview;
 pub mod run;
+pub mod run_log;
 pub mod scene;
 pub mod scene_override;
 pub mod setup;

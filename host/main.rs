@@ -153,6 +153,7 @@ fn main() -> ExitCode {
                 }),
                 quiet,
                 preview,
+                overrides: set,
             };
             match run(&parsed, &file, &options) {
                 Ok(summary) => {

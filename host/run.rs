@@ -5,6 +5,7 @@ use crate::model::{LaplacianModel, Model, StressModel};
 use crate::output::vtu::{encode, Field, Series};
 use crate::output::write_atomically;
 use crate::preview::{render, View};
+use crate::run_log::{resolved, RunLog};
 use crate::scene::{Precision, Scene, SceneError, ViscosityOperator};
 use crate::setup::{initial_particles, InitialParticles};
 use crate::simulation::{Instability, Simulation};
@@ -27,10 +28,12 @@ pub struct RunOptions {
     pub quiet: bool,
     /// Also write each frame as a PNG (`coil preview`'s picture, both views).
     pub preview: bool,
+    /// The `--set` overrides the scene went through, for the run log.
+    pub overrides: Vec<String>,
 }
 
 /// What a run did, printed at its end.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct Summary {
     pub steps: u64,
     pub simulated_s: f64,
@@ -93,10 +96,32 @@ pub fn run(scene: &Scene, scene_file: &str, options: &RunOptions) -> Result<Summ
         })
     })?;
     let precision = options.precision.unwrap_or(scene.simulation.precision);
-    match precision {
+    let mut log = RunLog {
+        coil_version: env!("CARGO_PKG_VERSION"),
+        scene_file,
+        overrides: &options.overrides,
+        backend: "cpu",
+        precision,
+        threads: rayon::current_num_threads(),
+        status: "running",
+        diagnosis: None,
+        summary: None::<Summary>,
+        scene: resolved(scene),
+    };
+    log.scene.simulation.precision = precision;
+    let log_path = options.out_dir.join("run.json");
+    log.write(&options.out_dir).map_err(|e| io_error("run log", &log_path, e))?;
+    let result = match precision {
         Precision::F32 => dispatch::<f32>(scene, &initial, options),
         Precision::F64 => dispatch::<f64>(scene, &initial, options),
-    }
+    };
+    (log.status, log.diagnosis, log.summary) = match &result {
+        Ok(summary) => ("completed", None, Some(summary.clone())),
+        Err(RunError::Unstable(i, summary)) => ("unstable", Some(i.to_string()), Some(summary.clone())),
+        Err(e) => ("failed", Some(e.to_string()), None),
+    };
+    log.write(&options.out_dir).map_err(|e| io_error("run log", &log_path, e))?;
+    result
 }
 
 /// Picks the physics variant once; everything after runs monomorphised for it.

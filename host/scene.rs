@@ -3,7 +3,7 @@
 //! structs for the kernels.
 
 use crate::scene_override::{self, Override};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::Path;
 
@@ -23,7 +23,7 @@ impl fmt::Display for SceneError {
 
 impl std::error::Error for SceneError {}
 
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     /// Short name, used for the output folder.
@@ -46,7 +46,7 @@ pub struct Scene {
     pub inlets: Vec<Inlet>,
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Material {
     /// rho0 (kg/m^3), Eq. (6).
@@ -86,7 +86,7 @@ fn default_gravity() -> [f64; 3] {
 }
 
 /// Which discretisation of the viscous term.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum ViscosityOperator {
     /// The paper's: velocity gradient, Eq. (8), stress, Eq. (2), divergence, Eq. (9).
@@ -97,7 +97,7 @@ pub enum ViscosityOperator {
 }
 
 /// Kinematic viscosities (m^2/s) and the Cross model, Eq. (3).
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Viscosity {
     #[serde(default)]
@@ -129,14 +129,14 @@ impl Viscosity {
 }
 
 /// The box that holds every particle (m); particles that leave it are removed and counted.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Domain {
     pub min_m: [f64; 3],
     pub max_m: [f64; 3],
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum Precision {
     #[default]
@@ -144,7 +144,7 @@ pub enum Precision {
     F64,
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Simulation {
     /// Simulated time to run (s).
@@ -159,7 +159,7 @@ pub struct Simulation {
 }
 
 /// dt: automatic from Eq. (10) and the velocity CFL, or fixed.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct TimeStep {
     /// Multiplies the automatic dt (0 < factor <= 1).
@@ -178,7 +178,7 @@ impl Default for TimeStep {
     }
 }
 
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Output {
     /// Write a frame every this many simulated seconds.
@@ -194,7 +194,7 @@ impl Default for Output {
 }
 
 /// A block of fluid on the particle lattice, at rest unless given a velocity.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct FluidBlock {
     pub min_m: [f64; 3],
@@ -204,7 +204,7 @@ pub struct FluidBlock {
 }
 
 /// Walls of fixed virtual particles (paper Sec. III-B), in layers that cover the support.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields, tag = "shape", rename_all = "snake_case")]
 pub enum Boundary {
     /// Walls around the interior `min_m`..`max_m`; `open_top` leaves out the lid (max y).
@@ -219,7 +219,7 @@ pub enum Boundary {
     Plate { height_m: f64, min_xz_m: Option<[f64; 2]>, max_xz_m: Option<[f64; 2]> },
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields, tag = "shape", rename_all = "snake_case")]
 pub enum Nozzle {
     Circle {
@@ -234,7 +234,7 @@ pub enum Nozzle {
 
 /// A jet inlet (paper Sec. III-C): layers of particles are injected each time the previous
 /// layer has moved one layer spacing away, until the particle budget is reached.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Inlet {
     pub nozzle: Nozzle,
@@ -258,7 +258,7 @@ pub struct Inlet {
     pub wobble_m: f64,
 }
 
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields, untagged)]
 pub enum NozzleMotion {
     /// Constant velocity (m/s).

@@ -95,6 +95,16 @@ fn a_short_run_writes_a_frame_series() {
         dir.join("top.png").to_str().expect("utf-8"),
     ]);
     assert!(shown.status.success() && dir.join("top.png").is_file(), "{}", String::from_utf8_lossy(&shown.stderr));
+    let log: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("out/run.json")).expect("run log")).expect("JSON");
+    assert_eq!(log["status"], "completed");
+    assert_eq!(log["backend"], "cpu");
+    assert_eq!(log["summary"]["frames"], 3);
+    // The logged scene is the run's scene with every default written out: it reproduces the run.
+    let logged: Scene = serde_json::from_value(log["scene"].clone()).expect("a scene");
+    let mut expected = Scene::load(&path).expect("valid");
+    expected.material.viscosity.nu_inf_m2_s = Some(expected.material.viscosity.nu_inf());
+    assert_eq!(logged, expected);
     let pvd = std::fs::read_to_string(dir.join("out/dam_break.pvd")).expect("series");
     assert_eq!(pvd.matches("<DataSet").count(), 3, "frames at t = 0, 0.002, 0.004 s: {pvd}");
     let frame = std::fs::read(dir.join("out/frame_000002.vtu")).expect("frame");

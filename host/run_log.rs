@@ -1,0 +1,41 @@
+//! `run.json` in the output folder: everything needed to reproduce a run and read its outcome.
+//! Written when the run starts (status "running") and again when it ends, through a temporary
+//! name and a rename, so a killed run still leaves a readable log.
+
+use crate::output::write_atomically;
+use crate::scene::{Precision, Scene};
+use serde::Serialize;
+use std::path::Path;
+
+/// The scene with every default written out.
+pub fn resolved(scene: &Scene) -> Scene {
+    let mut s = scene.clone();
+    let v = &mut s.material.viscosity;
+    v.nu_inf_m2_s = Some(v.nu_inf());
+    s
+}
+
+#[derive(Serialize)]
+pub struct RunLog<'a, S: Serialize> {
+    pub coil_version: &'static str,
+    pub scene_file: &'a str,
+    /// The `--set` overrides, already applied to `scene`.
+    pub overrides: &'a [String],
+    pub backend: &'static str,
+    pub precision: Precision,
+    pub threads: usize,
+    /// "running", "completed", "unstable" or "failed" (output could not be written).
+    pub status: &'static str,
+    /// Why the run stopped early, if it did.
+    pub diagnosis: Option<String>,
+    /// The summary printed at the end (None while running).
+    pub summary: Option<S>,
+    pub scene: Scene,
+}
+
+impl<S: Serialize> RunLog<'_, S> {
+    pub fn write(&self, dir: &Path) -> std::io::Result<()> {
+        let json = serde_json::to_vec_pretty(self).map_err(std::io::Error::other)?;
+        write_atomically(&dir.join("run.json"), &json)
+    }
+}
