@@ -133,6 +133,16 @@ impl Inlet {
         self.layer.len()
     }
 
+    /// Particles injected per second while the jet runs.
+    pub fn particles_per_second(&self) -> f64 {
+        self.layer.len() as f64 * self.speed / self.layer_distance
+    }
+
+    /// When the jet starts and stops (s).
+    pub fn active(&self) -> (f64, f64) {
+        (self.start, self.stop)
+    }
+
     /// Jet speed (m/s).
     pub fn speed(&self) -> f64 {
         self.speed

@@ -1,4 +1,5 @@
 pub use coil_kernels as kernels;
+pub mod check;
 pub mod frame;
 pub mod inlet;
 pub mod model;

@@ -1,6 +1,7 @@
 //! The `coil` command line.
 
 use clap::{Parser, Subcommand, ValueEnum};
+use coil::check::check;
 use coil::output::vtu_read::read_frame;
 use coil::preview::{frame_path, render_frame, Coloring, View};
 use coil::run::{run, RunError, RunOptions};
@@ -67,6 +68,24 @@ enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
+    /// Validate a scene and say what it will cost: particle counts, h, the Eq. (10) bound and
+    /// its limiting term, memory, and the wall time estimated from a short calibration run.
+    Check {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Override a scene field, as for `run`.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Floating-point precision [default: the scene's].
+        #[arg(long, value_enum)]
+        precision: Option<PrecisionArg>,
+        /// Worker threads [default: all cores].
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Seconds of calibration run.
+        #[arg(long, default_value_t = 2.0)]
+        calibrate_s: f64,
+    },
     /// List the shipped scenes, one line each, with what each reproduces.
     Scenes {
         /// Folder of scene files.
@@ -94,10 +113,51 @@ enum PrecisionArg {
     F64,
 }
 
+impl PrecisionArg {
+    fn precision(self) -> Precision {
+        match self {
+            PrecisionArg::F32 => Precision::F32,
+            PrecisionArg::F64 => Precision::F64,
+        }
+    }
+}
+
+/// Sizes rayon's pool; `None` keeps one thread per core.
+fn set_threads(threads: Option<usize>) -> Result<(), String> {
+    match threads {
+        None => Ok(()),
+        Some(0) => Err("--threads: must be at least 1".into()),
+        Some(t) => rayon::ThreadPoolBuilder::new().num_threads(t).build_global().map_err(|e| format!("--threads: {e}")),
+    }
+}
+
+/// Reads a scene and applies its `--set` overrides, validating the result.
+fn load_scene(path: &Path, set: &[String]) -> Result<Scene, String> {
+    let overrides = set.iter().map(|o| Override::parse(o)).collect::<Result<Vec<_>, _>>().map_err(|e| e.to_string())?;
+    Scene::load_with(path, &overrides).map_err(|e| e.to_string())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Scenes { dir } => list_scenes(&dir),
+        Command::Check { scene, set, precision, threads, calibrate_s } => {
+            let file = scene.display().to_string();
+            let report = set_threads(threads).and_then(|()| load_scene(&scene, &set)).and_then(|parsed| {
+                let calibration = std::time::Duration::from_secs_f64(calibrate_s.clamp(0.0, 600.0));
+                check(&parsed, &file, precision.map(PrecisionArg::precision), calibration).map_err(|e| e.to_string())
+            });
+            match report {
+                Ok(r) => {
+                    println!("{file}: valid\n{r}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
+                }
+            }
+        }
         Command::Preview { frame, view, color, range, size, output } => {
             let view = match view {
                 ViewArg::Side => View::Side,
@@ -120,25 +180,8 @@ fn main() -> ExitCode {
             }
         }
         Command::Run { scene, set, out, precision, threads, quiet, preview } => {
-            if let Some(t) = threads {
-                if t == 0 {
-                    eprintln!("error: --threads: must be at least 1");
-                    return ExitCode::from(2);
-                }
-                if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(t).build_global() {
-                    eprintln!("error: --threads: {e}");
-                    return ExitCode::from(2);
-                }
-            }
             let file = scene.display().to_string();
-            let overrides = match set.iter().map(|o| Override::parse(o)).collect::<Result<Vec<_>, _>>() {
-                Ok(o) => o,
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return ExitCode::from(2);
-                }
-            };
-            let parsed = match Scene::load_with(&scene, &overrides) {
+            let parsed = match set_threads(threads).and_then(|()| load_scene(&scene, &set)) {
                 Ok(s) => s,
                 Err(e) => {
                     eprintln!("error: {e}");
@@ -147,10 +190,7 @@ fn main() -> ExitCode {
             };
             let options = RunOptions {
                 out_dir: out.unwrap_or_else(|| PathBuf::from("out").join(&parsed.name)),
-                precision: precision.map(|p| match p {
-                    PrecisionArg::F32 => Precision::F32,
-                    PrecisionArg::F64 => Precision::F64,
-                }),
+                precision: precision.map(PrecisionArg::precision),
                 quiet,
                 preview,
                 overrides: set,

@@ -5,8 +5,9 @@
 use crate::neighbor_grid::NeighborGrid;
 use crate::parallel::launch;
 use crate::particles::{vec3_view, vec3_view_mut, view_mut, Particles};
+use crate::scene::{Scene, ViscosityOperator};
 use coil_kernels::acceleration::{acceleration_pass, AccelerationArgs, StressDivergence, VelocityLaplacian};
-use coil_kernels::cross_viscosity::{Newtonian, Rheology};
+use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::velocity_gradient::{stress_pass, StressArgs};
 use coil_kernels::view::{SymTensorView, SymTensorViewMut, View};
@@ -22,6 +23,26 @@ pub trait Model<R: Real>: Copy + Send + Sync + 'static {
     fn max_viscosity(&self) -> R;
     /// Velocity gradient and stress (when used), then accelerations, for all particles.
     fn accelerations(&self, grid: &NeighborGrid, fluid: &Fluid<R>, p: &mut Particles<R>);
+}
+
+/// Work done once per physics variant, monomorphised for it (`run`, `check`).
+pub trait WithModel {
+    type Output;
+    fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output;
+}
+
+/// Picks the physics variant of `scene` once, outside every particle loop, and hands it to `work`.
+pub fn with_model<R: Real, W: WithModel>(scene: &Scene, work: W) -> W::Output {
+    let v = &scene.material.viscosity;
+    let nu0 = R::from_f64(v.nu0_m2_s);
+    match (v.operator, v.is_newtonian()) {
+        (ViscosityOperator::Laplacian, _) => work.with::<R, _>(LaplacianModel(Newtonian { nu0 })),
+        (ViscosityOperator::Stress, true) => work.with::<R, _>(StressModel(Newtonian { nu0 })),
+        (ViscosityOperator::Stress, false) => {
+            let cross = Cross { nu0, nu_inf: R::from_f64(v.nu_inf()), k: R::from_f64(v.cross_k_s), n: R::from_f64(v.cross_n) };
+            work.with::<R, _>(StressModel(cross))
+        }
+    }
 }
 
 /// The paper's operator, Eq. (8), (2), (9), with rheology `Rh`.

@@ -1,15 +1,14 @@
 //! `coil run`: a scene on the CPU from t = 0 to its end time, writing frames as it goes.
 
 use crate::frame::Frame;
-use crate::model::{LaplacianModel, Model, StressModel};
+use crate::model::{with_model, Model, WithModel};
 use crate::output::vtu::{encode, Field, Series};
 use crate::output::write_atomically;
 use crate::preview::{render, View};
 use crate::run_log::{resolved, RunLog};
-use crate::scene::{Precision, Scene, SceneError, ViscosityOperator};
+use crate::scene::{Precision, Scene, SceneError};
 use crate::setup::{initial_particles, InitialParticles};
 use crate::simulation::{Instability, Simulation};
-use coil_kernels::cross_viscosity::{Cross, Newtonian};
 use coil_kernels::Real;
 use std::fmt;
 use std::path::PathBuf;
@@ -112,8 +111,8 @@ pub fn run(scene: &Scene, scene_file: &str, options: &RunOptions) -> Result<Summ
     let log_path = options.out_dir.join("run.json");
     log.write(&options.out_dir).map_err(|e| io_error("run log", &log_path, e))?;
     let result = match precision {
-        Precision::F32 => dispatch::<f32>(scene, &initial, options),
-        Precision::F64 => dispatch::<f64>(scene, &initial, options),
+        Precision::F32 => with_model::<f32, _>(scene, Drive { scene, initial: &initial, options }),
+        Precision::F64 => with_model::<f64, _>(scene, Drive { scene, initial: &initial, options }),
     };
     (log.status, log.diagnosis, log.summary) = match &result {
         Ok(summary) => ("completed", None, Some(summary.clone())),
@@ -124,17 +123,17 @@ pub fn run(scene: &Scene, scene_file: &str, options: &RunOptions) -> Result<Summ
     result
 }
 
-/// Picks the physics variant once; everything after runs monomorphised for it.
-fn dispatch<R: Real>(scene: &Scene, initial: &InitialParticles, options: &RunOptions) -> Result<Summary, RunError> {
-    let v = &scene.material.viscosity;
-    let nu0 = R::from_f64(v.nu0_m2_s);
-    match (v.operator, v.is_newtonian()) {
-        (ViscosityOperator::Laplacian, _) => drive(scene, initial, LaplacianModel(Newtonian { nu0 }), options),
-        (ViscosityOperator::Stress, true) => drive(scene, initial, StressModel(Newtonian { nu0 }), options),
-        (ViscosityOperator::Stress, false) => {
-            let cross = Cross { nu0, nu_inf: R::from_f64(v.nu_inf()), k: R::from_f64(v.cross_k_s), n: R::from_f64(v.cross_n) };
-            drive(scene, initial, StressModel(cross), options)
-        }
+/// The time loop of a run, for whichever physics variant the scene picks.
+struct Drive<'a> {
+    scene: &'a Scene,
+    initial: &'a InitialParticles,
+    options: &'a RunOptions,
+}
+
+impl WithModel for Drive<'_> {
+    type Output = Result<Summary, RunError>;
+    fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
+        drive(self.scene, self.initial, model, self.options)
     }
 }
 

@@ -166,3 +166,28 @@ fn set_overrides_any_field_with_the_files_validation() {
     let out = coil(&["run", jet.to_str().expect("utf-8"), "--set", "material.particle_spacing_m=0", "--quiet"]);
     assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
 }
+
+#[test]
+fn check_reports_counts_the_equation_10_bound_and_a_calibrated_estimate() {
+    use coil::check::check;
+    use coil::time_step::Limit;
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let dam = Scene::load(&dir.join("dam_break.toml")).expect("valid");
+    let r = check(&dam, "dam_break.toml", None, std::time::Duration::from_millis(200)).expect("valid");
+    assert_eq!((r.initial_fluid, r.inlet_rate), (8000, 0.0));
+    // h = 0.04 m, c = 20 m/s, nu0 = 0.05 m^2/s: 0.1 h/c = 2e-4 s below 0.1 h^2/(8 nu0) = 4e-4 s.
+    assert!((r.dt_s - 2e-4).abs() < 1e-15 && r.limit == Limit::Acoustic, "{r}");
+    assert_eq!(r.steps, (dam.simulation.end_time_s / 2e-4).ceil());
+    assert_eq!(r.particle_steps, r.steps * (8000 + r.boundary) as f64);
+    assert!(r.seconds_per_particle_step > 0.0 && r.calibration_steps >= 5);
+    assert!((r.estimated_wall_s - r.particle_steps * r.seconds_per_particle_step).abs() < 1e-9);
+
+    // The jet: no fluid at t = 0; the inlet delivers rho0 A U / m particles per second.
+    let jet = Scene::load(&dir.join("round_jet.toml")).expect("valid");
+    let r = check(&jet, "round_jet.toml", None, std::time::Duration::from_millis(200)).expect("valid");
+    let mass = coil::setup::calibrated_mass(1000.0, 0.004, 0.008);
+    let rate = 1000.0 * std::f64::consts::PI * 0.01 * 0.01 * 1.0 / mass;
+    assert!(r.initial_fluid == 0 && (r.inlet_rate - rate).abs() < 1e-9 * rate, "{} vs {rate}", r.inlet_rate);
+    assert_eq!(r.final_fluid, ((rate * 0.8) as usize).min(4200));
+    assert!(r.limit == Limit::Viscous && (r.dt_s - 8e-6).abs() < 1e-18, "{r}");
+}

@@ -1,0 +1,216 @@
+//! `coil check`: what a scene will cost before it runs. Counts, h, the Eq. (10) bound and its
+//! limiting term, memory, and a wall-time estimate from a short calibration run on this machine.
+
+use crate::inlet::Inlet;
+use crate::model::{with_model, Model, WithModel};
+use crate::scene::{Boundary, Domain, FluidBlock, Precision, Scene, SceneError};
+use crate::setup::{calibrated_mass, initial_particles, InitialParticles};
+use crate::simulation::Simulation;
+use crate::time_step::{Limit, StabilityBound};
+use coil_kernels::Real;
+use std::fmt;
+use std::time::{Duration, Instant};
+
+/// What `coil check` prints.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Report {
+    pub initial_fluid: usize,
+    pub boundary: usize,
+    /// Fluid capacity: the initial fluid plus everything inlets may inject.
+    pub fluid_capacity: usize,
+    /// Particles per second from all inlets while they run.
+    pub inlet_rate: f64,
+    /// Fluid particles at the end time, from the inlet rates and the budget.
+    pub final_fluid: usize,
+    pub spacing_m: f64,
+    pub support_radius_m: f64,
+    pub bound: StabilityBound,
+    /// dt the run will take (s) and what limits it; the velocity CFL may lower it further when a
+    /// particle moves faster than c.
+    pub dt_s: f64,
+    pub limit: Limit,
+    pub steps: f64,
+    pub memory_bytes: usize,
+    pub precision: Precision,
+    pub threads: usize,
+    /// Measured cost of one particle through one step (s), from the calibration run.
+    pub seconds_per_particle_step: f64,
+    pub calibration_steps: u64,
+    /// Particle-steps of the whole run, boundary included.
+    pub particle_steps: f64,
+    pub estimated_wall_s: f64,
+}
+
+impl fmt::Display for Report {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let mib = self.memory_bytes as f64 / (1024.0 * 1024.0);
+        writeln!(f, "particles          {} fluid at t = 0, {} boundary", self.initial_fluid, self.boundary)?;
+        if self.inlet_rate > 0.0 {
+            writeln!(f, "inlets             {:.0} particles/s, {} fluid at the end time", self.inlet_rate, self.final_fluid)?;
+        }
+        writeln!(f, "capacity           {} fluid (simulation.max_fluid_particles)", self.fluid_capacity)?;
+        writeln!(f, "spacing, h         {} m, {} m", self.spacing_m, self.support_radius_m)?;
+        writeln!(
+            f,
+            "Eq. (10) bound     {:.3e} s: acoustic 0.1 h/c = {:.3e} s, viscous 0.1 h^2/(8 nu0) = {:.3e} s",
+            self.bound.dt().0,
+            self.bound.acoustic_s,
+            self.bound.viscous_s
+        )?;
+        writeln!(f, "dt                 {:.3e} s, limited by the {}", self.dt_s, self.limit)?;
+        writeln!(f, "steps              {:.0}", self.steps)?;
+        writeln!(f, "memory             {mib:.1} MiB of particle and grid arrays ({:?})", self.precision)?;
+        writeln!(
+            f,
+            "calibration        {:.3e} s per particle-step over {} steps on {} thread(s)",
+            self.seconds_per_particle_step, self.calibration_steps, self.threads
+        )?;
+        write!(
+            f,
+            "estimated wall     {} for {:.3e} particle-steps on this machine",
+            human(self.estimated_wall_s),
+            self.particle_steps
+        )
+    }
+}
+
+fn human(s: f64) -> String {
+    if s < 120.0 {
+        format!("{s:.0} s")
+    } else if s < 7200.0 {
+        format!("{:.1} min", s / 60.0)
+    } else {
+        format!("{:.1} h", s / 3600.0)
+    }
+}
+
+/// Fluid particles at time `t` (s): the initial fluid plus what the inlets delivered, up to the
+/// capacity (inlets inject whole layers up to it).
+fn fluid_at(t: f64, initial: usize, capacity: usize, inlets: &[Inlet]) -> f64 {
+    let injected: f64 = inlets
+        .iter()
+        .map(|i| {
+            let (start, stop) = i.active();
+            i.particles_per_second() * (t.min(stop) - start).max(0.0)
+        })
+        .sum();
+    (initial as f64 + injected).min(capacity as f64)
+}
+
+/// `scene`'s material in a closed box filled with a cube of about `fluid` particles at rest.
+fn fluid_box(scene: &Scene, fluid: f64) -> Scene {
+    let s = scene.material.particle_spacing_m;
+    let edge = fluid.max(1000.0).cbrt().ceil() * s;
+    let pad = 2.0 * scene.support_radius() + s;
+    let mut proxy = scene.clone();
+    proxy.inlets.clear();
+    proxy.boundaries = vec![Boundary::Box { min_m: [0.0; 3], max_m: [edge; 3], open_top: false }];
+    proxy.fluid_blocks = vec![FluidBlock { min_m: [0.0; 3], max_m: [edge; 3], velocity_m_s: [0.0; 3] }];
+    proxy.domain = Domain { min_m: [-pad; 3], max_m: [edge + pad; 3] };
+    proxy.simulation.max_fluid_particles = None;
+    proxy
+}
+
+struct Calibrate<'a> {
+    scene: &'a Scene,
+    initial: &'a InitialParticles,
+    wall: Duration,
+}
+
+impl WithModel for Calibrate<'_> {
+    /// (seconds per particle-step, steps taken)
+    type Output = (f64, u64);
+    fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
+        let mut sim = Simulation::<R, M>::new(self.scene, self.initial, model);
+        let started = Instant::now();
+        let mut particle_steps = 0.0;
+        // Stop at the first instability too: a scene's cost is still worth reporting.
+        while (sim.steps < 5 || started.elapsed() < self.wall) && sim.steps < 10_000 && sim.step().is_ok() {
+            particle_steps += sim.particles.len() as f64;
+        }
+        let seconds = started.elapsed().as_secs_f64();
+        (if particle_steps > 0.0 { seconds / particle_steps } else { 0.0 }, sim.steps)
+    }
+}
+
+/// Sets the run up, as `coil run` would, to count the bytes it allocates.
+struct Allocate<'a> {
+    scene: &'a Scene,
+    initial: &'a InitialParticles,
+}
+
+impl WithModel for Allocate<'_> {
+    type Output = usize;
+    fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
+        Simulation::<R, M>::new(self.scene, self.initial, model).memory_bytes()
+    }
+}
+
+/// Checks `scene` and measures its cost for `calibration` of wall time.
+pub fn check(scene: &Scene, file: &str, precision: Option<Precision>, calibration: Duration) -> Result<Report, SceneError> {
+    let initial = initial_particles(scene, file)?;
+    let mat = &scene.material;
+    let (s, h) = (mat.particle_spacing_m, scene.support_radius());
+    let mass = calibrated_mass(mat.rest_density_kg_m3, s, h);
+    let inlets: Vec<Inlet> = scene.inlets.iter().map(|c| Inlet::new(c, s, h, mass, mat.rest_density_kg_m3)).collect();
+    let capacity = scene.simulation.max_fluid_particles.unwrap_or(0).max(initial.fluid.len());
+    let v = &mat.viscosity;
+    let bound = StabilityBound::new(h, mat.sound_speed_m_s, v.nu0_m2_s.max(v.nu_inf()));
+    let ts = &scene.simulation.time_step;
+    let (dt, limit) = match ts.fixed_s {
+        Some(dt) => (dt, Limit::Fixed),
+        None => {
+            let (dt, limit) = bound.dt();
+            (ts.safety_factor * dt, limit)
+        }
+    };
+    let end = scene.simulation.end_time_s;
+    let steps = (end / dt).ceil();
+    // Particle-steps over the run, the fluid count integrated over time.
+    let samples = 200;
+    let mean_fluid = (0..samples)
+        .map(|k| fluid_at((k as f64 + 0.5) * end / samples as f64, initial.fluid.len(), capacity, &inlets))
+        .sum::<f64>()
+        / samples as f64;
+    let particle_steps = steps * (initial.boundary.len() as f64 + mean_fluid);
+    let precision = precision.unwrap_or(scene.simulation.precision);
+    // A jet scene starts with no fluid, and walls with empty neighborhoods cost a fraction of a
+    // fluid particle: calibrate it on a box of the run's mean fluid count instead.
+    let (proxy, proxy_initial);
+    let (calibrated_scene, calibrated_initial) = if (initial.fluid.len() as f64) < 0.5 * mean_fluid {
+        proxy = fluid_box(scene, mean_fluid);
+        proxy_initial = initial_particles(&proxy, file)?;
+        (&proxy, &proxy_initial)
+    } else {
+        (scene, &initial)
+    };
+    let work = Calibrate { scene: calibrated_scene, initial: calibrated_initial, wall: calibration };
+    let (seconds_per_particle_step, calibration_steps) = match precision {
+        Precision::F32 => with_model::<f32, _>(calibrated_scene, work),
+        Precision::F64 => with_model::<f64, _>(calibrated_scene, work),
+    };
+    let memory_bytes = match precision {
+        Precision::F32 => with_model::<f32, _>(scene, Allocate { scene, initial: &initial }),
+        Precision::F64 => with_model::<f64, _>(scene, Allocate { scene, initial: &initial }),
+    };
+    Ok(Report {
+        initial_fluid: initial.fluid.len(),
+        boundary: initial.boundary.len(),
+        fluid_capacity: capacity,
+        inlet_rate: inlets.iter().map(Inlet::particles_per_second).sum(),
+        final_fluid: fluid_at(end, initial.fluid.len(), capacity, &inlets) as usize,
+        spacing_m: s,
+        support_radius_m: h,
+        bound,
+        dt_s: dt,
+        limit,
+        steps,
+        memory_bytes,
+        precision,
+        threads: rayon::current_num_threads(),
+        seconds_per_particle_step,
+        calibration_steps,
+        particle_steps,
+        estimated_wall_s: particle_steps * seconds_per_particle_step,
+    })
+}
