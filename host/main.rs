@@ -229,7 +229,13 @@ fn list_scenes(dir: &Path) -> ExitCode {
     let mut status = ExitCode::SUCCESS;
     for path in paths {
         match Scene::load(&path) {
-            Ok(scene) => println!("{:<28} {}", path.display(), scene.description),
+            Ok(scene) => {
+                println!("{:<32} {}", path.display(), scene.description);
+                for v in &scene.variants {
+                    let sets: String = v.set.iter().map(|s| format!(" --set {s}")).collect();
+                    println!("  {:<30} {}\n  {:<30} coil run {}{sets}", v.name, v.description, "", path.display());
+                }
+            }
             Err(e) => {
                 eprintln!("error: {e}");
                 status = ExitCode::from(2);

@@ -40,10 +40,26 @@ pub struct Scene {
     pub output: Output,
     #[serde(default, rename = "fluid_block")]
     pub fluid_blocks: Vec<FluidBlock>,
+    #[serde(default, rename = "fluid_torus")]
+    pub fluid_tori: Vec<FluidTorus>,
     #[serde(default, rename = "boundary")]
     pub boundaries: Vec<Boundary>,
     #[serde(default, rename = "inlet")]
     pub inlets: Vec<Inlet>,
+    /// Named `--set` combinations of this scene that reproduce other panels of a figure;
+    /// `coil scenes` lists them with their commands.
+    #[serde(default, rename = "variant")]
+    pub variants: Vec<Variant>,
+}
+
+/// A named set of overrides of a scene.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Variant {
+    pub name: String,
+    pub description: String,
+    /// `KEY=VALUE` overrides, as given to `--set`.
+    pub set: Vec<String>,
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
@@ -199,6 +215,19 @@ impl Default for Output {
 pub struct FluidBlock {
     pub min_m: [f64; 3],
     pub max_m: [f64; 3],
+    #[serde(default)]
+    pub velocity_m_s: [f64; 3],
+}
+
+/// A ring of fluid with a vertical axis (the spreading torus of Fig. 3 and 4), on the particle
+/// lattice: the points within `minor_radius_m` of the circle of `major_radius_m` around `centre_m`
+/// in the horizontal plane.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FluidTorus {
+    pub centre_m: [f64; 3],
+    pub major_radius_m: f64,
+    pub minor_radius_m: f64,
     #[serde(default)]
     pub velocity_m_s: [f64; 3],
 }
@@ -415,6 +444,19 @@ impl Scene {
             }
             if !inside(b.min_m) || !inside(b.max_m) {
                 return err(&format!("fluid_block[{k}]"), "lies outside the domain box".into());
+            }
+        }
+        for (k, t) in self.fluid_tori.iter().enumerate() {
+            let field = |f: &str| format!("fluid_torus[{k}].{f}");
+            positive(&field("major_radius_m"), t.major_radius_m)?;
+            positive(&field("minor_radius_m"), t.minor_radius_m)?;
+            if t.minor_radius_m >= t.major_radius_m {
+                return err(&field("minor_radius_m"), format!("must be below major_radius_m ({}) for a ring with a hole", t.major_radius_m));
+            }
+            let (c, reach) = (t.centre_m, t.major_radius_m + t.minor_radius_m);
+            let (lo, hi) = ([c[0] - reach, c[1] - t.minor_radius_m, c[2] - reach], [c[0] + reach, c[1] + t.minor_radius_m, c[2] + reach]);
+            if !inside(lo) || !inside(hi) {
+                return err(&format!("fluid_torus[{k}]"), "lies outside the domain box".into());
             }
         }
         for (k, b) in self.boundaries.iter().enumerate() {

@@ -87,6 +87,31 @@ pub fn initial_particles(scene: &Scene, file: &str) -> Result<InitialParticles, 
             ));
         }
     }
+    for (k, t) in scene.fluid_tori.iter().enumerate() {
+        let before = p.fluid.len();
+        let (c, big, small) = (t.centre_m, t.major_radius_m, t.minor_radius_m);
+        let min = [c[0] - big - small, c[1] - small, c[2] - big - small];
+        let n = [cells(2.0 * (big + small), s), cells(2.0 * small, s), cells(2.0 * (big + small), s)];
+        lattice(
+            min,
+            s,
+            [0; 3],
+            n,
+            |i| {
+                let q = [0, 1, 2].map(|a| min[a] + (i[a] as f64 + 0.5) * s - c[a]);
+                let ring = (q[0] * q[0] + q[2] * q[2]).sqrt() - big;
+                ring * ring + q[1] * q[1] <= small * small
+            },
+            &mut p.fluid,
+        );
+        p.fluid_velocity.resize(p.fluid.len(), t.velocity_m_s);
+        if let Some(q) = overlap(&p.boundary, &p.fluid[before..], s) {
+            return Err(err(
+                format!("fluid_torus[{k}]"),
+                format!("overlaps a wall at {q:?}: fluid must start inside the walls, not in them"),
+            ));
+        }
+    }
     Ok(p)
 }
 

@@ -19,9 +19,13 @@ fn shipped_scenes() -> Vec<std::path::PathBuf> {
 #[test]
 fn every_shipped_scene_loads_and_steps() {
     let scenes = shipped_scenes();
-    assert!(scenes.len() >= 2);
+    assert!(scenes.len() >= 6);
     for path in scenes {
         let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        for v in &scene.variants {
+            let sets: Vec<_> = v.set.iter().map(|s| coil::scene_override::Override::parse(s).expect(s)).collect();
+            Scene::load_with(&path, &sets).unwrap_or_else(|e| panic!("variant {}: {e}", v.name));
+        }
         let initial = initial_particles(&scene, &path.display().to_string()).unwrap_or_else(|e| panic!("{e}"));
         let nu0 = scene.material.viscosity.nu0_m2_s;
         let mut sim = Simulation::<f32, _>::new(&scene, &initial, StressModel(Newtonian { nu0: nu0 as f32 }));
