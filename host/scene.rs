@@ -296,6 +296,37 @@ pub enum NozzleMotion {
     Waypoints { waypoints: Vec<[f64; 4]> },
 }
 
+/// For serde's "unknown field `x`, expected one of `a`, `b`" (or "expected `a` or `b`"): the
+/// nearest valid name, when it is a plausible typo.
+fn suggestion(message: &str) -> String {
+    let Some(rest) = message.strip_prefix("unknown field `") else { return String::new() };
+    let Some((unknown, expected)) = rest.split_once('`') else { return String::new() };
+    let nearest = expected
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .map(|name| (edit_distance(unknown, name), name))
+        .min()
+        .filter(|&(d, name)| d <= 1 + name.len().max(unknown.len()) / 3);
+    nearest.map(|(_, name)| format!("; did you mean `{name}`?")).unwrap_or_default()
+}
+
+/// Levenshtein distance between two names.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let next = (diagonal + usize::from(ca != cb)).min(row[j] + 1).min(row[j + 1] + 1);
+            diagonal = row[j + 1];
+            row[j + 1] = next;
+        }
+    }
+    row[b.len()]
+}
+
 impl Scene {
     /// Reads and validates a scene file.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
@@ -334,6 +365,7 @@ impl Scene {
             file: file.into(),
             field: "(syntax)".into(),
             reason: e.message().to_string()
+                + &suggestion(e.message())
                 + &e.span().map(|s| format!(" (at line {})", 1 + text[..s.start].matches('\n').count())).unwrap_or_default(),
         })?;
         scene.validate(file)?;
@@ -451,10 +483,14 @@ impl Scene {
             positive(&field("major_radius_m"), t.major_radius_m)?;
             positive(&field("minor_radius_m"), t.minor_radius_m)?;
             if t.minor_radius_m >= t.major_radius_m {
-                return err(&field("minor_radius_m"), format!("must be below major_radius_m ({}) for a ring with a hole", t.major_radius_m));
+                return err(
+                    &field("minor_radius_m"),
+                    format!("must be below major_radius_m ({}) for a ring with a hole", t.major_radius_m),
+                );
             }
             let (c, reach) = (t.centre_m, t.major_radius_m + t.minor_radius_m);
-            let (lo, hi) = ([c[0] - reach, c[1] - t.minor_radius_m, c[2] - reach], [c[0] + reach, c[1] + t.minor_radius_m, c[2] + reach]);
+            let (lo, hi) =
+                ([c[0] - reach, c[1] - t.minor_radius_m, c[2] - reach], [c[0] + reach, c[1] + t.minor_radius_m, c[2] + reach]);
             if !inside(lo) || !inside(hi) {
                 return err(&format!("fluid_torus[{k}]"), "lies outside the domain box".into());
             }

@@ -49,7 +49,8 @@ fn bad_scenes_exit_2_naming_file_and_field() {
         ("nu0_m2_s = 0.05", "nu0_m2_s = -0.05", "material.viscosity.nu0_m2_s"),
         ("nu_inf_m2_s = 0.005", "nu_inf_m2_s = 0.5", "material.viscosity.nu_inf_m2_s"),
         ("cross_n = 1.0", "cross_n = 0.0", "material.viscosity.cross_n"),
-        ("cross_n = 1.0", "cross_nn = 1.0", "cross_nn"),
+        ("cross_n = 1.0", "cross_nn = 1.0", "did you mean `cross_n`?"),
+        ("nu0_m2_s = 0.05", "nu0_m2s = 0.05", "did you mean `nu0_m2_s`?"),
         ("particle_spacing_m = 0.02", "particle_spacing_m = 0.0", "material.particle_spacing_m"),
         (
             "max_m = [0.4, 0.4, 0.4]",
