@@ -10,7 +10,9 @@ use crate::scene::{Precision, Scene, SceneError};
 use crate::setup::{initial_particles, InitialParticles};
 use crate::simulation::{Instability, Simulation};
 use coil_kernels::Real;
+use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt;
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -137,6 +139,55 @@ impl WithModel for Drive<'_> {
     }
 }
 
+/// The progress bar: simulated time, steps/s, particles, dt and its limiting term, ETA. Where
+/// stderr is not a terminal (a log file, CI) a plain line every 10 s replaces it.
+struct Progress {
+    bar: Option<ProgressBar>,
+    last_line: Instant,
+}
+
+impl Progress {
+    fn new(quiet: bool) -> Self {
+        let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
+            let bar = ProgressBar::new(1000);
+            bar.set_style(
+                ProgressStyle::with_template("{bar:30.cyan/blue} {percent:>3}% {msg} ETA {eta}").expect("a valid template"),
+            );
+            bar
+        });
+        Self { bar, last_line: Instant::now() }
+    }
+
+    fn report<R: Real, M: Model<R>>(&mut self, sim: &Simulation<R, M>, end: f64, wall: Duration) {
+        let rate = sim.steps as f64 / wall.as_secs_f64().max(1e-9);
+        let line = format!(
+            "t = {:.4}/{end} s | {rate:.0} steps/s | {} fluid particles | dt {:.2e} s ({})",
+            sim.time,
+            sim.fluid_count(),
+            sim.last_dt,
+            sim.last_limit
+        );
+        match &self.bar {
+            Some(bar) => {
+                bar.set_position((1000.0 * sim.time / end) as u64);
+                bar.set_message(line);
+            }
+            None if self.last_line.elapsed() >= Duration::from_secs(10) => {
+                self.last_line = Instant::now();
+                let eta = (end - sim.time) / sim.time.max(1e-300) * wall.as_secs_f64();
+                eprintln!("{line} | ETA {eta:.0} s");
+            }
+            None => {}
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
+    }
+}
+
 fn io_error(what: &str, path: &std::path::Path, e: std::io::Error) -> RunError {
     RunError::Io(format!("cannot write {what} {}: {e}", path.display()))
 }
@@ -188,6 +239,7 @@ fn drive<R: Real, M: Model<R>>(
 
     let started = Instant::now();
     let mut last_report = started;
+    let mut progress = Progress::new(options.quiet);
     let mut particle_steps = 0f64;
     let mut max_density_error = 0f64;
     let mut max_speed = 0f64;
@@ -212,6 +264,7 @@ fn drive<R: Real, M: Model<R>>(
         let (dt, limit) = sim.next_dt();
         let dt = dt.min(end - sim.time);
         if let Err(instability) = sim.step_with(dt, limit) {
+            progress.finish();
             let s = summary(&sim, frames, particle_steps, max_density_error, max_speed);
             return Err(RunError::Unstable(instability, s));
         }
@@ -228,20 +281,11 @@ fn drive<R: Real, M: Model<R>>(
                 next_frame_time += every_s.unwrap_or(f64::INFINITY);
             }
         }
-        if !options.quiet && last_report.elapsed() >= Duration::from_secs(2) {
+        if !options.quiet && last_report.elapsed() >= Duration::from_millis(200) {
             last_report = Instant::now();
-            let wall = started.elapsed().as_secs_f64();
-            let rate = sim.steps as f64 / wall;
-            let eta = (end - sim.time) / sim.time * wall;
-            eprintln!(
-                "t = {:.5} / {end} s  step {}  dt {:.2e} s ({})  {} fluid particles  {rate:.1} steps/s  ETA {eta:.0} s",
-                sim.time,
-                sim.steps,
-                sim.last_dt,
-                sim.last_limit,
-                sim.fluid_count()
-            );
+            progress.report(&sim, end, started.elapsed());
         }
     }
+    progress.finish();
     Ok(summary(&sim, frames, particle_steps, max_density_error, max_speed))
 }
