@@ -76,3 +76,52 @@ fn preview_has_the_expected_size_and_shows_the_particles() {
     assert_eq!((by_speed.width, by_speed.height), (size + 110, size));
     assert_ne!(by_speed.pixels, render_frame(&frame, View::Side, Coloring::Viscosity, None, size).expect("has viscosity").pixels);
 }
+
+#[test]
+fn a_run_killed_mid_write_leaves_only_whole_frames() {
+    let dir = std::env::temp_dir().join(format!("coil-kill-{}", std::process::id()));
+    let out = dir.join("out");
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    // A frame every step, so the kill is likely to land inside a write.
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_coil"))
+        .args([
+            "run",
+            scene.to_str().expect("utf-8"),
+            "--quiet",
+            "--set",
+            "output.every_steps=1",
+            "--out",
+            out.to_str().expect("utf-8"),
+        ])
+        .spawn()
+        .expect("coil starts");
+    let frames = |out: &std::path::Path| {
+        std::fs::read_dir(out)
+            .map(|d| d.filter_map(|e| e.ok()).filter(|e| e.path().extension().is_some_and(|x| x == "vtu")).count())
+            .unwrap_or(0)
+    };
+    let started = std::time::Instant::now();
+    while frames(&out) < 6 && started.elapsed() < std::time::Duration::from_secs(60) {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.kill().expect("kill");
+    child.wait().expect("reaped");
+    let mut whole = 0;
+    for entry in std::fs::read_dir(&out).expect("out") {
+        let path = entry.expect("entry").path();
+        if path.extension().is_some_and(|x| x == "vtu") {
+            coil::output::vtu_read::read_frame(&path).unwrap_or_else(|e| panic!("torn frame: {e}"));
+            whole += 1;
+        }
+    }
+    assert!(whole >= 6, "{whole} frames before the kill");
+    // The series names only frames that exist, whole.
+    let pvd = std::fs::read_to_string(out.join("dam_break.pvd")).expect("series");
+    for file in pvd.split("file=\"").skip(1).map(|s| &s[..s.find('"').expect("closing quote")]) {
+        assert!(out.join(file).is_file(), "{file} listed but missing");
+    }
+    let log: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("log")).expect("whole JSON");
+    assert_eq!(log["status"], "running", "killed before the end");
+    std::fs::remove_dir_all(&dir).ok();
+}
