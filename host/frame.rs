@@ -1,6 +1,7 @@
 //! Per-particle output fields of the fluid, gathered from a run into reusable buffers.
 
 use crate::model::Model;
+use crate::output::points::{encode_ply, encode_xyz};
 use crate::output::vtu::{encode, Field};
 use crate::particles::vec3_view;
 use crate::simulation::Simulation;
@@ -68,6 +69,24 @@ impl Frame {
             self.shear_rate.push(d);
             self.id.push(p.id[i]);
         }
+    }
+
+    /// The frame as a binary `.ply` file's bytes.
+    pub fn to_ply(&mut self) -> &[u8] {
+        let scalars = [
+            ("density", &self.density[..]),
+            ("pressure", &self.pressure[..]),
+            ("viscosity", &self.viscosity[..]),
+            ("shear_rate", &self.shear_rate[..]),
+        ];
+        encode_ply(&self.position, &self.velocity, scalars, &self.id, &mut self.bytes);
+        &self.bytes
+    }
+
+    /// The frame as a splashsurf `.xyz` file's bytes.
+    pub fn to_xyz(&mut self) -> &[u8] {
+        encode_xyz(&self.position, &mut self.bytes);
+        &self.bytes
     }
 
     /// The frame as a `.vtu` file's bytes.

@@ -6,7 +6,7 @@ use crate::output::vtu::{encode, Field, Series};
 use crate::output::write_atomically;
 use crate::preview::{render, View};
 use crate::run_log::{resolved, RunLog};
-use crate::scene::{Precision, Scene, SceneError};
+use crate::scene::{FrameFormat, Precision, Scene, SceneError};
 use crate::setup::{initial_particles, InitialParticles};
 use crate::simulation::{Instability, Simulation};
 use coil_kernels::Real;
@@ -217,7 +217,14 @@ fn drive<R: Real, M: Model<R>>(
         frame.capture(sim);
         let name = format!("frame_{:06}.vtu", *frames);
         let path = dir.join(&name);
-        write_atomically(&path, frame.to_vtu()).map_err(|e| io_error("frame", &path, e))?;
+        for format in &scene.output.formats {
+            let (file, bytes) = match format {
+                FrameFormat::Vtu => (path.clone(), frame.to_vtu()),
+                FrameFormat::Ply => (path.with_extension("ply"), frame.to_ply()),
+                FrameFormat::Xyz => (path.with_extension("xyz"), frame.to_xyz()),
+            };
+            write_atomically(&file, bytes).map_err(|e| io_error("frame", &file, e))?;
+        }
         if options.preview {
             let v = &scene.material.viscosity;
             // The paper's colouring, nu_inf to nu0; a Newtonian fluid has one colour, so speed.
@@ -231,7 +238,9 @@ fn drive<R: Real, M: Model<R>>(
             let png = path.with_extension("png");
             image.save(&png).map_err(|e| io_error("preview", &png, e))?;
         }
-        series.push(sim.time, &name).map_err(|e| io_error("series", series.path(), e))?;
+        if scene.output.formats.contains(&FrameFormat::Vtu) {
+            series.push(sim.time, &name).map_err(|e| io_error("series", series.path(), e))?;
+        }
         *frames += 1;
         Ok(())
     };

@@ -201,11 +201,28 @@ pub struct Output {
     pub every_s: Option<f64>,
     /// Or every this many steps.
     pub every_steps: Option<u64>,
+    /// File formats of each frame: `vtu` (with the `.pvd` series, for ParaView), `ply` (binary),
+    /// `xyz` (positions as f32 triples, which splashsurf meshes directly).
+    #[serde(default = "default_formats")]
+    pub formats: Vec<FrameFormat>,
+}
+
+/// A file format of output frames.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum FrameFormat {
+    Vtu,
+    Ply,
+    Xyz,
+}
+
+fn default_formats() -> Vec<FrameFormat> {
+    vec![FrameFormat::Vtu]
 }
 
 impl Default for Output {
     fn default() -> Self {
-        Self { every_s: Some(0.01), every_steps: None }
+        Self { every_s: Some(0.01), every_steps: None, formats: default_formats() }
     }
 }
 
@@ -466,6 +483,9 @@ impl Scene {
         }
         if self.output.every_steps == Some(0) {
             return err("output.every_steps", "must be at least 1".into());
+        }
+        if self.output.formats.is_empty() {
+            return err("output.formats", "must name at least one of \"vtu\", \"ply\", \"xyz\"".into());
         }
 
         for (k, b) in self.fluid_blocks.iter().enumerate() {

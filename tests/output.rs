@@ -125,3 +125,30 @@ fn a_run_killed_mid_write_leaves_only_whole_frames() {
     assert_eq!(log["status"], "running", "killed before the end");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn frames_also_as_binary_ply_and_splashsurf_xyz() {
+    let dir = std::env::temp_dir().join(format!("coil-formats-{}", std::process::id()));
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_coil"))
+        .args(["run", scene.to_str().expect("utf-8"), "--quiet", "--out", dir.to_str().expect("utf-8")])
+        .args(["--set", "simulation.end_time_s=0.0004", "--set", r#"output.formats=["vtu", "ply", "xyz"]"#])
+        .output()
+        .expect("coil runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let frame = coil::output::vtu_read::read_frame(&dir.join("frame_000000.vtu")).expect("vtu");
+    let n = frame.position.len();
+    let xyz = std::fs::read(dir.join("frame_000000.xyz")).expect("xyz");
+    assert_eq!(xyz.len(), 12 * n);
+    let first: Vec<f32> = xyz[..12].chunks(4).map(|c| f32::from_ne_bytes(c.try_into().expect("4 bytes"))).collect();
+    assert_eq!(first, frame.position[0].map(|x| x as f32));
+    let ply = std::fs::read(dir.join("frame_000000.ply")).expect("ply");
+    let end = ply.windows(11).position(|w| w == b"end_header\n").expect("a PLY header") + 11;
+    let header = String::from_utf8_lossy(&ply[..end]);
+    assert!(header.starts_with("ply\nformat binary_little_endian 1.0\n") && header.contains(&format!("element vertex {n}\n")));
+    // x y z vx vy vz density pressure viscosity shear_rate as float, id as uint.
+    assert_eq!(ply.len() - end, 44 * n);
+    let last_id = u32::from_le_bytes(ply[ply.len() - 4..].try_into().expect("4 bytes"));
+    assert_eq!(last_id, frame.id[n - 1]);
+    std::fs::remove_dir_all(&dir).ok();
+}

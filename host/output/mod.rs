@@ -1,5 +1,6 @@
 //! Frames: one VTK XML `.vtu` per frame plus a `.pvd` series that ParaView opens.
 
+pub mod points;
 pub mod vtu;
 pub mod vtu_read;
 
