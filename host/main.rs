@@ -33,6 +33,10 @@ enum Command {
         /// Output folder [default: out/<scene name>].
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Where the physics runs: cpu, or auto (a CUDA device when this build has the CUDA
+        /// backend and one is present, else the CPU).
+        #[arg(long, value_enum, default_value = "auto")]
+        backend: BackendArg,
         /// Floating-point precision of the physics [default: the scene's].
         #[arg(long, value_enum)]
         precision: Option<PrecisionArg>,
@@ -92,6 +96,12 @@ enum Command {
         #[arg(default_value = "scenes")]
         dir: PathBuf,
     },
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum BackendArg {
+    Auto,
+    Cpu,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -179,7 +189,7 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Run { scene, set, out, precision, threads, quiet, preview } => {
+        Command::Run { scene, set, out, backend, precision, threads, quiet, preview } => {
             let file = scene.display().to_string();
             let parsed = match set_threads(threads).and_then(|()| load_scene(&scene, &set)) {
                 Ok(s) => s,
@@ -188,6 +198,9 @@ fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
             };
+            if backend == BackendArg::Auto && !quiet {
+                eprintln!("backend: cpu (this build has no CUDA backend)");
+            }
             let options = RunOptions {
                 out_dir: out.unwrap_or_else(|| PathBuf::from("out").join(&parsed.name)),
                 precision: precision.map(PrecisionArg::precision),

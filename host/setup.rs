@@ -112,6 +112,14 @@ pub fn initial_particles(scene: &Scene, file: &str) -> Result<InitialParticles, 
             ));
         }
     }
+    if let Some(budget) = scene.simulation.max_fluid_particles {
+        if budget < p.fluid.len() {
+            return Err(err(
+                "simulation.max_fluid_particles".into(),
+                format!("{budget} is below the {} particles of the initial fluid", p.fluid.len()),
+            ));
+        }
+    }
     Ok(p)
 }
 

@@ -57,6 +57,7 @@ fn bad_scenes_exit_2_naming_file_and_field() {
             "max_m = [0.4, 0.4, 0.4]\n[[fluid_block]]\nmin_m = [-0.1, 0.0, 0.0]\nmax_m = [0.0, 0.1, 0.1]",
             "fluid_block[1]",
         ),
+        ("end_time_s = 1.0", "end_time_s = 1.0\nmax_fluid_particles = 7999", "simulation.max_fluid_particles"),
     ];
     for (k, (from, to, field)) in cases.iter().enumerate() {
         assert!(good.contains(from), "{from}");
