@@ -63,7 +63,7 @@ enum Command {
         #[arg(long, value_enum, default_value = "viscosity")]
         color: ColorArg,
         /// Colour range MIN,MAX [default: the frame's own range; 0 to the top speed].
-        #[arg(long, value_delimiter = ',', num_args = 2, value_name = "MIN,MAX")]
+        #[arg(long, value_delimiter = ',', value_name = "MIN,MAX")]
         range: Option<Vec<f64>>,
         /// Pixels per panel side.
         #[arg(long, default_value_t = 600)]
@@ -178,7 +178,15 @@ fn main() -> ExitCode {
                 ColorArg::Viscosity => Coloring::Viscosity,
                 ColorArg::Speed => Coloring::Speed,
             };
-            match preview(&frame, view, coloring, range.map(|r| (r[0], r[1])), size, output) {
+            let range = match range.as_deref() {
+                None => None,
+                Some(&[min, max]) if min < max => Some((min, max)),
+                Some(r) => {
+                    eprintln!("error: --range: expected MIN,MAX with MIN < MAX, got {r:?}");
+                    return ExitCode::from(2);
+                }
+            };
+            match preview(&frame, view, coloring, range, size, output) {
                 Ok(png) => {
                     println!("{}", png.display());
                     ExitCode::SUCCESS

@@ -97,10 +97,14 @@ fn a_short_run_writes_a_frame_series() {
         dir.join("out").to_str().expect("utf-8"),
         "--view",
         "top",
+        "--range",
+        "0.005,0.05",
         "-o",
         dir.join("top.png").to_str().expect("utf-8"),
     ]);
     assert!(shown.status.success() && dir.join("top.png").is_file(), "{}", String::from_utf8_lossy(&shown.stderr));
+    let reversed = coil(&["preview", dir.join("out").to_str().expect("utf-8"), "--range", "0.05,0.005"]);
+    assert_eq!(reversed.status.code(), Some(2), "a range with MIN > MAX is refused");
     let log: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("out/run.json")).expect("run log")).expect("JSON");
     assert_eq!(log["status"], "completed");
