@@ -106,7 +106,7 @@ pub fn run(scene: &Scene, scene_file: &str, options: &RunOptions) -> Result<Summ
         threads: rayon::current_num_threads(),
         status: "running",
         diagnosis: None,
-        summary: None::<Summary>,
+        summary: None,
         scene: resolved(scene),
     };
     log.scene.simulation.precision = precision;

@@ -3,6 +3,7 @@
 //! name and a rename, so a killed run still leaves a readable log.
 
 use crate::output::write_atomically;
+use crate::run::Summary;
 use crate::scene::{Precision, Scene};
 use serde::Serialize;
 use std::path::Path;
@@ -16,7 +17,7 @@ pub fn resolved(scene: &Scene) -> Scene {
 }
 
 #[derive(Serialize)]
-pub struct RunLog<'a, S: Serialize> {
+pub struct RunLog<'a> {
     pub coil_version: &'static str,
     pub scene_file: &'a str,
     /// The `--set` overrides, already applied to `scene`.
@@ -29,11 +30,11 @@ pub struct RunLog<'a, S: Serialize> {
     /// Why the run stopped early, if it did.
     pub diagnosis: Option<String>,
     /// The summary printed at the end (None while running).
-    pub summary: Option<S>,
+    pub summary: Option<Summary>,
     pub scene: Scene,
 }
 
-impl<S: Serialize> RunLog<'_, S> {
+impl RunLog<'_> {
     pub fn write(&self, dir: &Path) -> std::io::Result<()> {
         let json = serde_json::to_vec_pretty(self).map_err(std::io::Error::other)?;
         write_atomically(&dir.join("run.json"), &json)
