@@ -132,6 +132,7 @@ fn a_nozzle_wobbling_a_spacing_or_a_tube_outside_the_domain_is_refused() {
         ("wobble_m = 0.001", "wobble_m = -0.001", "inlet[0].wobble_m", "at least 0"),
         // The exit is inside the domain (top at 0.23 m) but the tube, h = 0.008 m long, is not.
         ("position_m = [0.0, 0.2, 0.0]", "position_m = [0.0, 0.225, 0.0]", "inlet[0].position_m", "tube"),
+        ("position_m = [0.0, 0.2, 0.0]", "position_m = [0.5, 0.2, 0.0]", "inlet[0].position_m", "outside the domain"),
     ];
     for (from, to, field, reason) in cases {
         assert!(good.contains(from), "{from}");
@@ -200,4 +201,21 @@ fn check_reports_counts_the_equation_10_bound_and_a_calibrated_estimate() {
     assert!(r.initial_fluid == 0 && (r.inlet_rate - rate).abs() < 1e-9 * rate, "{} vs {rate}", r.inlet_rate);
     assert_eq!(r.final_fluid, ((rate * 0.8) as usize).min(4200));
     assert!(r.limit == Limit::Viscous && (r.dt_s - 8e-6).abs() < 1e-18, "{r}");
+}
+
+#[test]
+fn an_output_folder_that_cannot_be_created_exits_2_naming_it() {
+    // A folder inside a regular file cannot be created, even by root.
+    let file = std::env::temp_dir().join(format!("coil-not-a-dir-{}", std::process::id()));
+    std::fs::write(&file, b"").expect("temp file");
+    let out_dir = file.join("out");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    let out = coil(&["run", scene.to_str().expect("utf-8"), "--quiet", "--out", out_dir.to_str().expect("utf-8")]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("--out") && stderr.contains(out_dir.to_str().expect("utf-8")) && !stderr.contains("panicked"),
+        "{stderr}"
+    );
+    std::fs::remove_file(&file).ok();
 }
