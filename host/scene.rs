@@ -313,6 +313,21 @@ pub enum NozzleMotion {
     Waypoints { waypoints: Vec<[f64; 4]> },
 }
 
+/// The TOML text of a scene file; a `run.json` gives its `scene`, written back as TOML.
+fn scene_text(path: &Path) -> Result<String, SceneError> {
+    let file = path.display().to_string();
+    let bad = |field: &str, reason: String| SceneError { file: file.clone(), field: field.into(), reason };
+    let text = std::fs::read_to_string(path).map_err(|e| bad("(file)", format!("cannot be read: {e}")))?;
+    if path.extension().is_none_or(|x| x != "json") {
+        return Ok(text);
+    }
+    let log: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad("(syntax)", e.to_string()))?;
+    let scene: Scene =
+        serde_json::from_value(log.get("scene").cloned().ok_or_else(|| bad("scene", "missing: not a run.json".into()))?)
+            .map_err(|e| bad("scene", e.to_string()))?;
+    toml::to_string(&scene).map_err(|e| bad("scene", e.to_string()))
+}
+
 /// For serde's "unknown field `x`, expected one of `a`, `b`" (or "expected `a` or `b`"): the
 /// nearest valid name, when it is a plausible typo.
 fn suggestion(message: &str) -> String {
@@ -345,28 +360,19 @@ fn edit_distance(a: &str, b: &str) -> usize {
 }
 
 impl Scene {
-    /// Reads and validates a scene file.
+    /// Reads and validates a scene file: TOML, or the `run.json` of an earlier run, whose
+    /// resolved scene reproduces that run.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-            file: file.clone(),
-            field: "(file)".into(),
-            reason: format!("cannot be read: {e}"),
-        })?;
-        Self::parse(&text, &file)
+        Self::load_with(path, &[])
     }
 
     /// Reads a scene file, applies `--set` overrides in order, and validates the result as one.
     pub fn load_with(path: &Path, overrides: &[Override]) -> Result<Scene, SceneError> {
-        if overrides.is_empty() {
-            return Self::load(path);
-        }
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-            file: file.clone(),
-            field: "(file)".into(),
-            reason: format!("cannot be read: {e}"),
-        })?;
+        let text = scene_text(path)?;
+        if overrides.is_empty() {
+            return Self::parse(&text, &file);
+        }
         Self::parse(&scene_override::apply(&text, &file, overrides)?, &format!("{file} with --set")).map_err(|mut e| {
             // Line numbers would point into the rewritten text, not the user's file.
             if let Some(at) = e.reason.find(" (at line ") {

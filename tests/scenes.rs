@@ -58,6 +58,9 @@ fn bad_scenes_exit_2_naming_file_and_field() {
             "fluid_block[1]",
         ),
         ("end_time_s = 1.0", "end_time_s = 1.0\nmax_fluid_particles = 7999", "simulation.max_fluid_particles"),
+        ("sound_speed_m_s = 20.0", "sound_speed_m_s = 0.0", "material.sound_speed_m_s"),
+        ("nu0_m2_s = 0.05", "nu0_m2_s = 0.0", "material.viscosity.nu0_m2_s"),
+        ("end_time_s = 1.0", "", "missing field `end_time_s`"),
     ];
     for (k, (from, to, field)) in cases.iter().enumerate() {
         assert!(good.contains(from), "{from}");
@@ -115,6 +118,15 @@ fn a_short_run_writes_a_frame_series() {
     let mut expected = Scene::load(&path).expect("valid");
     expected.material.viscosity.nu_inf_m2_s = Some(expected.material.viscosity.nu_inf());
     assert_eq!(logged, expected);
+    // `coil run run.json` repeats the run bit for bit.
+    let again = dir.join("again");
+    let rerun =
+        coil(&["run", dir.join("out/run.json").to_str().expect("utf-8"), "--out", again.to_str().expect("utf-8"), "--quiet"]);
+    assert!(rerun.status.success(), "{}", String::from_utf8_lossy(&rerun.stderr));
+    assert_eq!(
+        std::fs::read(again.join("frame_000002.vtu")).expect("rerun frame"),
+        std::fs::read(dir.join("out/frame_000002.vtu")).expect("frame")
+    );
     let pvd = std::fs::read_to_string(dir.join("out/dam_break.pvd")).expect("series");
     assert_eq!(pvd.matches("<DataSet").count(), 3, "frames at t = 0, 0.002, 0.004 s: {pvd}");
     let frame = std::fs::read(dir.join("out/frame_000002.vtu")).expect("frame");
