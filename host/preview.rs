@@ -140,7 +140,13 @@ pub fn render(position: &[[f64; 3]], value: &[f32], range: (f64, f64), view: Vie
             hi[a] = hi[a].max(p[a]);
         }
     }
-    let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f64::max).max(1e-9);
+    // The axes the panels show: a top view alone is not shrunk by the height of the jet.
+    let shown: &[usize] = match view {
+        View::Side => &[0, 1],
+        View::Top => &[0, 2],
+        View::Both => &[0, 1, 2],
+    };
+    let extent = shown.iter().map(|&a| hi[a] - lo[a]).fold(0.0, f64::max).max(1e-9);
     let margin = 0.06 * size as f64;
     let scale = (size as f64 - 2.0 * margin) / extent;
     let radius = (size as f64 / 260.0).max(1.0);
