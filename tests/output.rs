@@ -4,7 +4,10 @@ use coil::output::vtu::{encode, Field};
 use coil::output::vtu_read::parse;
 use coil::preview::{render, render_frame, Coloring, View};
 
-fn cloud(n: usize) -> (Vec<[f64; 3]>, Vec<[f32; 3]>, Vec<f32>, Vec<u32>) {
+/// Positions, velocities, viscosities and ids of a test cloud.
+type Cloud = (Vec<[f64; 3]>, Vec<[f32; 3]>, Vec<f32>, Vec<u32>);
+
+fn cloud(n: usize) -> Cloud {
     // A helix, so side and top views differ.
     let position = (0..n).map(|k| {
         let t = k as f64 * 0.05;
