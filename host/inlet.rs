@@ -172,6 +172,11 @@ impl Inlet {
         }
     }
 
+    /// Velocity of the fluid leaving a nozzle that moves at `nozzle_velocity` (m/s).
+    fn jet_velocity(&self, nozzle_velocity: [f64; 3]) -> [f64; 3] {
+        [0, 1, 2].map(|k| self.speed * self.direction[k] + nozzle_velocity[k])
+    }
+
     /// The nozzle's tube at time `t` (s), for the nozzle pass.
     pub fn tube<R: Real>(&self, t: f64) -> NozzleTube<R> {
         let (exit, nozzle_velocity) = self.nozzle(t);
@@ -182,7 +187,7 @@ impl Inlet {
             half_extent: self.half_extent,
             round: u32::from(self.round),
             length: self.tube_length + 0.5 * self.spacing,
-            velocity: [0, 1, 2].map(|k| R::from_f64(self.speed * self.direction[k] + nozzle_velocity[k])),
+            velocity: self.jet_velocity(nozzle_velocity).map(R::from_f64),
         }
     }
 
@@ -194,7 +199,7 @@ impl Inlet {
         }
         self.travelled += self.speed * dt;
         let (centre, nozzle_velocity) = self.nozzle(t + dt);
-        let velocity = [0, 1, 2].map(|k| self.speed * self.direction[k] + nozzle_velocity[k]);
+        let velocity = self.jet_velocity(nozzle_velocity);
         let mut added = 0;
         while self.travelled >= self.layer_distance && added + self.layer.len() <= budget {
             self.travelled -= self.layer_distance;

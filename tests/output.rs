@@ -18,15 +18,21 @@ fn cloud(n: usize) -> Cloud {
     (position.collect(), velocity.collect(), viscosity.collect(), (0..n as u32).map(|k| 7 * k + 3).collect())
 }
 
+/// The cloud as a `.vtu` file's bytes.
+fn encoded(position: &[[f64; 3]], velocity: &[[f32; 3]], viscosity: &[f32], id: &[u32]) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    encode(
+        position,
+        &[Field::Vector("velocity", velocity), Field::Scalar("viscosity", viscosity), Field::Id("id", id)],
+        &mut bytes,
+    );
+    bytes
+}
+
 #[test]
 fn a_frame_written_and_read_back_gives_the_same_particles() {
     let (position, velocity, viscosity, id) = cloud(1000);
-    let mut bytes = Vec::new();
-    encode(
-        &position,
-        &[Field::Vector("velocity", &velocity), Field::Scalar("viscosity", &viscosity), Field::Id("id", &id)],
-        &mut bytes,
-    );
+    let bytes = encoded(&position, &velocity, &viscosity, &id);
     let frame = parse(&bytes).expect("own format");
     // Bit for bit: positions are written as f64, the fields as the f32 they are.
     assert_eq!(frame.position, position);
@@ -68,13 +74,7 @@ fn preview_has_the_expected_size_and_shows_the_particles() {
     assert_eq!(&buf[..info.buffer_size()], &image.pixels[..]);
 
     // From a frame: coloured by speed as well.
-    let mut bytes = Vec::new();
-    encode(
-        &position,
-        &[Field::Vector("velocity", &velocity), Field::Scalar("viscosity", &viscosity), Field::Id("id", &id)],
-        &mut bytes,
-    );
-    let frame = parse(&bytes).expect("own format");
+    let frame = parse(&encoded(&position, &velocity, &viscosity, &id)).expect("own format");
     let by_speed = render_frame(&frame, View::Side, Coloring::Speed, None, size).expect("has velocity");
     assert_eq!((by_speed.width, by_speed.height), (size + 110, size));
     assert_ne!(by_speed.pixels, render_frame(&frame, View::Side, Coloring::Viscosity, None, size).expect("has viscosity").pixels);
