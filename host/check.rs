@@ -4,9 +4,9 @@
 use crate::inlet::Inlet;
 use crate::model::{with_model, Model, WithModel};
 use crate::scene::{Boundary, Domain, FluidBlock, Precision, Scene, SceneError};
-use crate::setup::{calibrated_mass, initial_particles, InitialParticles};
+use crate::setup::{initial_particles, InitialParticles};
 use crate::simulation::Simulation;
-use crate::time_step::{Limit, StabilityBound};
+use crate::time_step::{Limit, StabilityBound, TimeStepper};
 use coil_kernels::Real;
 use std::fmt;
 use std::time::{Duration, Instant};
@@ -133,47 +133,56 @@ impl WithModel for Calibrate<'_> {
     }
 }
 
-/// Sets the run up, as `coil run` would, to count the bytes it allocates.
-struct Allocate<'a> {
+/// What a run of the scene will be, read off a run set up as `coil run` sets it up.
+struct RunPlan {
+    inlets: Vec<Inlet>,
+    fluid_capacity: usize,
+    stepper: TimeStepper,
+    memory_bytes: usize,
+}
+
+struct Plan<'a> {
     scene: &'a Scene,
     initial: &'a InitialParticles,
 }
 
-impl WithModel for Allocate<'_> {
-    type Output = usize;
+impl WithModel for Plan<'_> {
+    type Output = RunPlan;
     fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
-        Simulation::<R, M>::new(self.scene, self.initial, model).memory_bytes()
+        let sim = Simulation::<R, M>::new(self.scene, self.initial, model);
+        RunPlan {
+            inlets: sim.inlets().to_vec(),
+            fluid_capacity: sim.fluid_capacity(),
+            stepper: sim.stepper,
+            memory_bytes: sim.memory_bytes(),
+        }
     }
 }
 
 /// Checks `scene` and measures its cost for `calibration` of wall time.
 pub fn check(scene: &Scene, file: &str, precision: Option<Precision>, calibration: Duration) -> Result<Report, SceneError> {
     let initial = initial_particles(scene, file)?;
-    let mat = &scene.material;
-    let (s, h) = (mat.particle_spacing_m, scene.support_radius());
-    let mass = calibrated_mass(mat.rest_density_kg_m3, s, h);
-    let inlets: Vec<Inlet> = scene.inlets.iter().map(|c| Inlet::new(c, s, h, mass, mat.rest_density_kg_m3)).collect();
-    let capacity = scene.simulation.max_fluid_particles.unwrap_or(0).max(initial.fluid.len());
-    let v = &mat.viscosity;
-    let bound = StabilityBound::new(h, mat.sound_speed_m_s, v.nu0_m2_s.max(v.nu_inf()));
-    let ts = &scene.simulation.time_step;
-    let (dt, limit) = match ts.fixed_s {
-        Some(dt) => (dt, Limit::Fixed),
-        None => {
-            let (dt, limit) = bound.dt();
-            (ts.safety_factor * dt, limit)
-        }
+    let precision = precision.unwrap_or(scene.simulation.precision);
+    // The run as `coil run` sets it up: its inlets, capacity, time stepper and memory.
+    let plan = match precision {
+        Precision::F32 => with_model::<f32, _>(scene, Plan { scene, initial: &initial }),
+        Precision::F64 => with_model::<f64, _>(scene, Plan { scene, initial: &initial }),
     };
+    let (inlets, capacity) = (&plan.inlets, plan.fluid_capacity);
+    // Eq. (10) from the scene's own f64 values: an f32 run rounds nu0 first, which moves its
+    // bound in the eighth digit.
+    let v = &scene.material.viscosity;
+    let bound = StabilityBound::new(scene.support_radius(), scene.material.sound_speed_m_s, v.nu0_m2_s.max(v.nu_inf()));
+    let (dt, limit) = TimeStepper { bound, ..plan.stepper }.next(0.0);
     let end = scene.simulation.end_time_s;
     let steps = (end / dt).ceil();
     // Particle-steps over the run, the fluid count integrated over time.
     let samples = 200;
     let mean_fluid = (0..samples)
-        .map(|k| fluid_at((k as f64 + 0.5) * end / samples as f64, initial.fluid.len(), capacity, &inlets))
+        .map(|k| fluid_at((k as f64 + 0.5) * end / samples as f64, initial.fluid.len(), capacity, inlets))
         .sum::<f64>()
         / samples as f64;
     let particle_steps = steps * (initial.boundary.len() as f64 + mean_fluid);
-    let precision = precision.unwrap_or(scene.simulation.precision);
     // A jet scene starts with no fluid, and walls with empty neighborhoods cost a fraction of a
     // fluid particle: calibrate it on a box of the run's mean fluid count instead.
     let (proxy, proxy_initial);
@@ -189,23 +198,19 @@ pub fn check(scene: &Scene, file: &str, precision: Option<Precision>, calibratio
         Precision::F32 => with_model::<f32, _>(calibrated_scene, work),
         Precision::F64 => with_model::<f64, _>(calibrated_scene, work),
     };
-    let memory_bytes = match precision {
-        Precision::F32 => with_model::<f32, _>(scene, Allocate { scene, initial: &initial }),
-        Precision::F64 => with_model::<f64, _>(scene, Allocate { scene, initial: &initial }),
-    };
     Ok(Report {
         initial_fluid: initial.fluid.len(),
         boundary: initial.boundary.len(),
         fluid_capacity: capacity,
         inlet_rate: inlets.iter().map(Inlet::particles_per_second).sum(),
-        final_fluid: fluid_at(end, initial.fluid.len(), capacity, &inlets) as usize,
-        spacing_m: s,
-        support_radius_m: h,
+        final_fluid: fluid_at(end, initial.fluid.len(), capacity, inlets) as usize,
+        spacing_m: scene.material.particle_spacing_m,
+        support_radius_m: scene.support_radius(),
         bound,
         dt_s: dt,
         limit,
         steps,
-        memory_bytes,
+        memory_bytes: plan.memory_bytes,
         precision,
         threads: rayon::current_num_threads(),
         seconds_per_particle_step,

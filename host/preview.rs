@@ -210,6 +210,26 @@ pub fn frame_path(path: &Path) -> Result<std::path::PathBuf, String> {
         .ok_or_else(|| format!("{}: holds no frame_*.vtu", path.display()))
 }
 
+/// |v| (m/s) of each velocity.
+pub fn speeds(velocity: &[[f32; 3]]) -> Vec<f32> {
+    velocity.iter().map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()).collect()
+}
+
+/// The colour range of `value` by itself: its smallest to largest viscosity, or 0 to the top
+/// speed; (0, 1) when there is nothing to show.
+pub fn own_range(coloring: Coloring, value: &[f32]) -> (f64, f64) {
+    let max = value.iter().copied().fold(f32::NEG_INFINITY, f32::max) as f64;
+    let min = match coloring {
+        Coloring::Viscosity => value.iter().copied().fold(f32::INFINITY, f32::min) as f64,
+        Coloring::Speed => 0.0,
+    };
+    if min.is_finite() && max.is_finite() {
+        (min, max)
+    } else {
+        (0.0, 1.0)
+    }
+}
+
 /// Renders a frame file. `range` defaults to the frame's own smallest and largest value (for
 /// viscosity, nu_inf and nu0 wherever the flow reaches both), or 0 to the largest speed.
 pub fn render_frame(
@@ -221,25 +241,8 @@ pub fn render_frame(
 ) -> Result<Image, String> {
     let value: Vec<f32> = match coloring {
         Coloring::Viscosity => frame.scalars.get("viscosity").cloned().ok_or("the frame has no viscosity array")?,
-        Coloring::Speed => frame
-            .vectors
-            .get("velocity")
-            .ok_or("the frame has no velocity array")?
-            .iter()
-            .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
-            .collect(),
+        Coloring::Speed => speeds(frame.vectors.get("velocity").ok_or("the frame has no velocity array")?),
     };
-    let range = range.unwrap_or_else(|| {
-        let max = value.iter().copied().fold(f32::NEG_INFINITY, f32::max) as f64;
-        let min = match coloring {
-            Coloring::Viscosity => value.iter().copied().fold(f32::INFINITY, f32::min) as f64,
-            Coloring::Speed => 0.0,
-        };
-        if min.is_finite() && max.is_finite() {
-            (min, max)
-        } else {
-            (0.0, 1.0)
-        }
-    });
+    let range = range.unwrap_or_else(|| own_range(coloring, &value));
     Ok(render(&frame.position, &value, range, view, size))
 }

@@ -4,7 +4,7 @@ use crate::frame::Frame;
 use crate::model::{with_model, Model, WithModel};
 use crate::output::vtu::{encode, Field, Series};
 use crate::output::write_atomically;
-use crate::preview::{render, View};
+use crate::preview::{own_range, render, speeds, Coloring, View};
 use crate::run_log::{resolved, RunLog};
 use crate::scene::{FrameFormat, Precision, Scene, SceneError};
 use crate::setup::{initial_particles, InitialParticles};
@@ -231,9 +231,8 @@ fn drive<R: Real, M: Model<R>>(
             let image = if v.nu_inf() < v.nu0_m2_s {
                 render(&frame.position, &frame.viscosity, (v.nu_inf(), v.nu0_m2_s), View::Both, PREVIEW_SIZE)
             } else {
-                let speed: Vec<f32> = frame.velocity.iter().map(|u| (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt()).collect();
-                let top = speed.iter().copied().fold(0.0f32, f32::max).max(f32::MIN_POSITIVE) as f64;
-                render(&frame.position, &speed, (0.0, top), View::Both, PREVIEW_SIZE)
+                let speed = speeds(&frame.velocity);
+                render(&frame.position, &speed, own_range(Coloring::Speed, &speed), View::Both, PREVIEW_SIZE)
             };
             let png = path.with_extension("png");
             image.save(&png).map_err(|e| io_error("preview", &png, e))?;

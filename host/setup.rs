@@ -12,16 +12,46 @@ pub struct InitialParticles {
     pub fluid_velocity: Vec<[f64; 3]>,
 }
 
-/// Lattice points `min + (i + 1/2) s` for `i` in `lo..hi` along each axis.
-fn lattice(min: [f64; 3], s: f64, lo: [i64; 3], hi: [i64; 3], mut keep: impl FnMut([i64; 3]) -> bool, out: &mut Vec<[f64; 3]>) {
+/// Lattice points `min + (i + 1/2) s` for `i` in `lo..hi` along each axis that `keep` accepts,
+/// given their index and position.
+fn lattice(
+    min: [f64; 3],
+    s: f64,
+    lo: [i64; 3],
+    hi: [i64; 3],
+    mut keep: impl FnMut([i64; 3], [f64; 3]) -> bool,
+    out: &mut Vec<[f64; 3]>,
+) {
     for k in lo[2]..hi[2] {
         for j in lo[1]..hi[1] {
             for i in lo[0]..hi[0] {
-                if keep([i, j, k]) {
-                    out.push([min[0] + (i as f64 + 0.5) * s, min[1] + (j as f64 + 0.5) * s, min[2] + (k as f64 + 0.5) * s]);
+                let x = [min[0] + (i as f64 + 0.5) * s, min[1] + (j as f64 + 0.5) * s, min[2] + (k as f64 + 0.5) * s];
+                if keep([i, j, k], x) {
+                    out.push(x);
                 }
             }
         }
+    }
+}
+
+/// Gives the fluid particles added since `before` their initial velocity and refuses them if
+/// any sits in a wall; `field` names the fluid shape in the error.
+fn settle(
+    p: &mut InitialParticles,
+    before: usize,
+    velocity: [f64; 3],
+    s: f64,
+    field: String,
+    file: &str,
+) -> Result<(), SceneError> {
+    p.fluid_velocity.resize(p.fluid.len(), velocity);
+    match overlap(&p.boundary, &p.fluid[before..], s) {
+        None => Ok(()),
+        Some(q) => Err(SceneError {
+            file: file.into(),
+            field,
+            reason: format!("overlaps a wall at {q:?}: fluid must start inside the walls, not in them"),
+        }),
     }
 }
 
@@ -56,7 +86,7 @@ pub fn initial_particles(scene: &Scene, file: &str) -> Result<InitialParticles, 
                 let n = [0, 1, 2].map(|a| cells(max_m[a] - min_m[a], s));
                 let lo = [-layers; 3];
                 let hi = [n[0] + layers, if open_top { n[1] } else { n[1] + layers }, n[2] + layers];
-                lattice(min_m, s, lo, hi, |c| (0..3).any(|a| c[a] < 0 || c[a] >= n[a]), &mut p.boundary);
+                lattice(min_m, s, lo, hi, |c, _| (0..3).any(|a| c[a] < 0 || c[a] >= n[a]), &mut p.boundary);
             }
             Boundary::Plate { height_m, min_xz_m, max_xz_m } => {
                 let d = &scene.domain;
@@ -64,7 +94,7 @@ pub fn initial_particles(scene: &Scene, file: &str) -> Result<InitialParticles, 
                 let max_xz = max_xz_m.unwrap_or([d.max_m[0], d.max_m[2]]);
                 let n = [cells(max_xz[0] - min_xz[0], s), cells(max_xz[1] - min_xz[1], s)];
                 let min = [min_xz[0], height_m - layers as f64 * s, min_xz[1]];
-                lattice(min, s, [0, 0, 0], [n[0], layers, n[1]], |_| true, &mut p.boundary);
+                lattice(min, s, [0, 0, 0], [n[0], layers, n[1]], |_, _| true, &mut p.boundary);
             }
         }
         if let Some(q) = p.boundary[before..].iter().find(|q| !inside(scene, **q)) {
@@ -78,14 +108,8 @@ pub fn initial_particles(scene: &Scene, file: &str) -> Result<InitialParticles, 
     for (k, b) in scene.fluid_blocks.iter().enumerate() {
         let before = p.fluid.len();
         let n = [0, 1, 2].map(|a| cells(b.max_m[a] - b.min_m[a], s));
-        lattice(b.min_m, s, [0; 3], n, |_| true, &mut p.fluid);
-        p.fluid_velocity.resize(p.fluid.len(), b.velocity_m_s);
-        if let Some(q) = overlap(&p.boundary, &p.fluid[before..], s) {
-            return Err(err(
-                format!("fluid_block[{k}]"),
-                format!("overlaps a wall at {q:?}: fluid must start inside the walls, not in them"),
-            ));
-        }
+        lattice(b.min_m, s, [0; 3], n, |_, _| true, &mut p.fluid);
+        settle(&mut p, before, b.velocity_m_s, s, format!("fluid_block[{k}]"), file)?;
     }
     for (k, t) in scene.fluid_tori.iter().enumerate() {
         let before = p.fluid.len();
@@ -97,20 +121,14 @@ pub fn initial_particles(scene: &Scene, file: &str) -> Result<InitialParticles, 
             s,
             [0; 3],
             n,
-            |i| {
-                let q = [0, 1, 2].map(|a| min[a] + (i[a] as f64 + 0.5) * s - c[a]);
+            |_, x| {
+                let q = [0, 1, 2].map(|a| x[a] - c[a]);
                 let ring = (q[0] * q[0] + q[2] * q[2]).sqrt() - big;
                 ring * ring + q[1] * q[1] <= small * small
             },
             &mut p.fluid,
         );
-        p.fluid_velocity.resize(p.fluid.len(), t.velocity_m_s);
-        if let Some(q) = overlap(&p.boundary, &p.fluid[before..], s) {
-            return Err(err(
-                format!("fluid_torus[{k}]"),
-                format!("overlaps a wall at {q:?}: fluid must start inside the walls, not in them"),
-            ));
-        }
+        settle(&mut p, before, t.velocity_m_s, s, format!("fluid_torus[{k}]"), file)?;
     }
     if let Some(budget) = scene.simulation.max_fluid_particles {
         if budget < p.fluid.len() {

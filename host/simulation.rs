@@ -178,6 +178,16 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         self.grid.neighborhood(self.particles.position_view())
     }
 
+    /// The run's inlets.
+    pub fn inlets(&self) -> &[Inlet] {
+        &self.inlets
+    }
+
+    /// Fluid particles the run has room for: the initial fluid plus all inlets may inject.
+    pub fn fluid_capacity(&self) -> usize {
+        self.fluid_capacity
+    }
+
     /// Each inlet's nozzle tube now.
     pub fn inlet_tubes(&self) -> impl Iterator<Item = NozzleTube<R>> + '_ {
         self.inlets.iter().map(|inlet| inlet.tube(self.time))
