@@ -1,5 +1,7 @@
 pub use coil_kernels as kernels;
 pub mod check;
+#[cfg(feature = "cuda")]
+pub mod cuda;
 pub mod frame;
 pub mod inlet;
 pub mod model;

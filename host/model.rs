@@ -2,15 +2,14 @@
 //! Newtonian or Cross rheology, or Müller's Laplacian. Each is a type, so the CPU loops and the
 //! GPU kernels of a run contain only the physics it uses.
 
-use crate::neighbor_grid::NeighborGrid;
 use crate::parallel::launch;
-use crate::particles::{vec3_view, vec3_view_mut, view_mut, Particles};
 use crate::scene::{Scene, ViscosityOperator};
-use coil_kernels::acceleration::{acceleration_pass, AccelerationArgs, StressDivergence, VelocityLaplacian};
+use coil_kernels::acceleration::{acceleration_pass, AccelerationArgs, StressDivergence, VelocityLaplacian, ViscousOperator};
+use coil_kernels::cell_grid::Neighborhood;
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::velocity_gradient::{stress_pass, StressArgs};
-use coil_kernels::view::{SymTensorView, SymTensorViewMut, View};
+use coil_kernels::view::{SymTensorViewMut, Vec3View, Vec3ViewMut, View};
 use coil_kernels::Real;
 
 /// A viscosity operator and law, fixed for a run.
@@ -21,8 +20,42 @@ pub trait Model<R: Real>: Copy + Send + Sync + 'static {
     fn viscosity(&self, shear_rate: R) -> R;
     /// Largest viscosity the run can reach (m^2/s), for the Eq. (10) bound.
     fn max_viscosity(&self) -> R;
-    /// Velocity gradient and stress (when used), then accelerations, for all particles.
-    fn accelerations(&self, grid: &NeighborGrid, fluid: &Fluid<R>, p: &mut Particles<R>);
+    /// Velocity gradient and stress (when used), then accelerations, for all particles of
+    /// `state`, run by `backend`.
+    fn accelerations<B: Passes<R>>(&self, backend: &mut B, state: ParticleState<'_, R>);
+}
+
+/// What the acceleration passes read and write, as views a backend built over its own memory.
+#[derive(Clone, Copy)]
+pub struct ParticleState<'a, R> {
+    pub neighborhood: Neighborhood<'a>,
+    pub fluid: Fluid<R>,
+    pub id: View<'a, u32>,
+    pub velocity: Vec3View<'a, R>,
+    pub density: View<'a, R>,
+    /// Present when the model uses stress (`Model::USES_STRESS`).
+    pub stress: Option<SymTensorViewMut<'a, R>>,
+    pub acceleration: Vec3ViewMut<'a, R>,
+}
+
+/// A backend's way of running the kernels whose arguments depend on the model.
+pub trait Passes<R: Real> {
+    fn stress<Rh: Rheology<R>>(&mut self, args: StressArgs<'_, R, Rh>);
+    fn acceleration<Op: ViscousOperator<R>>(&mut self, args: AccelerationArgs<'_, R, Op>);
+}
+
+/// The CPU backend's passes: each kernel function over `n` particles with rayon.
+pub struct CpuPasses {
+    pub n: usize,
+}
+
+impl<R: Real> Passes<R> for CpuPasses {
+    fn stress<Rh: Rheology<R>>(&mut self, args: StressArgs<'_, R, Rh>) {
+        launch(self.n, |i| stress_pass(i, &args));
+    }
+    fn acceleration<Op: ViscousOperator<R>>(&mut self, args: AccelerationArgs<'_, R, Op>) {
+        launch(self.n, |i| acceleration_pass(i, &args));
+    }
 }
 
 /// Work done once per physics variant, monomorphised for it (`run`, `check`).
@@ -53,29 +86,6 @@ pub struct StressModel<Rh>(pub Rh);
 #[derive(Clone, Copy, Debug)]
 pub struct LaplacianModel<R>(pub Newtonian<R>);
 
-fn stress_views<R: Real>(s: &mut [Vec<R>; 6], n: usize) -> SymTensorViewMut<'_, R> {
-    let [xx, yy, zz, xy, xz, yz] = s;
-    SymTensorViewMut {
-        xx: view_mut(xx, n),
-        yy: view_mut(yy, n),
-        zz: view_mut(zz, n),
-        xy: view_mut(xy, n),
-        xz: view_mut(xz, n),
-        yz: view_mut(yz, n),
-    }
-}
-
-fn stress_read<R: Real>(s: &[Vec<R>; 6], n: usize) -> SymTensorView<'_, R> {
-    SymTensorView {
-        xx: View::new(&s[0][..n]),
-        yy: View::new(&s[1][..n]),
-        zz: View::new(&s[2][..n]),
-        xy: View::new(&s[3][..n]),
-        xz: View::new(&s[4][..n]),
-        yz: View::new(&s[5][..n]),
-    }
-}
-
 impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for StressModel<Rh> {
     const USES_STRESS: bool = true;
     fn viscosity(&self, shear_rate: R) -> R {
@@ -84,33 +94,24 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for StressModel<Rh> {
     fn max_viscosity(&self) -> R {
         self.0.max_viscosity()
     }
-    fn accelerations(&self, grid: &NeighborGrid, fluid: &Fluid<R>, p: &mut Particles<R>) {
-        let n = p.len();
-        let neighborhood = grid.neighborhood(vec3_view(&p.position, n));
-        let mut stress = p.stress.take().expect("the stress operator allocates stress");
-        {
-            let args = StressArgs {
-                neighborhood,
-                fluid: *fluid,
-                rheology: self.0,
-                velocity: vec3_view(&p.velocity, n),
-                density: View::new(&p.density[..n]),
-                stress: stress_views(&mut stress, n),
-            };
-            launch(n, |i| stress_pass(i, &args));
-        }
-        {
-            let args = AccelerationArgs {
-                neighborhood,
-                fluid: *fluid,
-                viscous: StressDivergence { stress: stress_read(&stress, n) },
-                id: View::new(&p.id[..n]),
-                density: View::new(&p.density[..n]),
-                acceleration: vec3_view_mut(&mut p.acceleration, n),
-            };
-            launch(n, |i| acceleration_pass(i, &args));
-        }
-        p.stress = Some(stress);
+    fn accelerations<B: Passes<R>>(&self, backend: &mut B, s: ParticleState<'_, R>) {
+        let stress = s.stress.expect("the stress operator allocates stress");
+        backend.stress(StressArgs {
+            neighborhood: s.neighborhood,
+            fluid: s.fluid,
+            rheology: self.0,
+            velocity: s.velocity,
+            density: s.density,
+            stress,
+        });
+        backend.acceleration(AccelerationArgs {
+            neighborhood: s.neighborhood,
+            fluid: s.fluid,
+            viscous: StressDivergence { stress: stress.read() },
+            id: s.id,
+            density: s.density,
+            acceleration: s.acceleration,
+        });
     }
 }
 
@@ -122,17 +123,14 @@ impl<R: Real> Model<R> for LaplacianModel<R> {
     fn max_viscosity(&self) -> R {
         self.0.max_viscosity()
     }
-    fn accelerations(&self, grid: &NeighborGrid, fluid: &Fluid<R>, p: &mut Particles<R>) {
-        let n = p.len();
-        let neighborhood = grid.neighborhood(vec3_view(&p.position, n));
-        let args = AccelerationArgs {
-            neighborhood,
-            fluid: *fluid,
-            viscous: VelocityLaplacian { nu0: self.0.nu0, velocity: vec3_view(&p.velocity, n) },
-            id: View::new(&p.id[..n]),
-            density: View::new(&p.density[..n]),
-            acceleration: vec3_view_mut(&mut p.acceleration, n),
-        };
-        launch(n, |i| acceleration_pass(i, &args));
+    fn accelerations<B: Passes<R>>(&self, backend: &mut B, s: ParticleState<'_, R>) {
+        backend.acceleration(AccelerationArgs {
+            neighborhood: s.neighborhood,
+            fluid: s.fluid,
+            viscous: VelocityLaplacian { nu0: self.0.nu0, velocity: s.velocity },
+            id: s.id,
+            density: s.density,
+            acceleration: s.acceleration,
+        });
     }
 }

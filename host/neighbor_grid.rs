@@ -4,13 +4,15 @@
 use crate::parallel::launch;
 use crate::particles::{view_mut, Particles};
 use coil_kernels::cell_grid::{hash_pass, CellGrid, HashArgs, Neighborhood};
-use coil_kernels::counting_sort::{chunk_total, count_particle, gather, scan_chunk, scatter, sort_bucket, Counters};
+use coil_kernels::counting_sort::{
+    chunk_total, count_particle, gather, scan_chunk, scan_chunk_offsets, scatter, sort_bucket, Counters,
+};
 use coil_kernels::view::{Vec3View, View, ViewMut};
 use coil_kernels::Real;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 /// Buckets per scan chunk.
-const SCAN_CHUNK: usize = 4096;
+pub const SCAN_CHUNK: usize = 4096;
 
 pub struct NeighborGrid {
     pub grid: CellGrid,
@@ -60,12 +62,7 @@ impl NeighborGrid {
         let totals = view_mut(&mut self.chunk_offsets, chunks);
         // SAFETY: invocation c writes only entry c.
         launch(chunks, |c| unsafe { totals.write(c, chunk_total(c, SCAN_CHUNK, counters)) });
-        let mut running = 0u32;
-        for t in self.chunk_offsets.iter_mut() {
-            let total = *t;
-            *t = running;
-            running += total;
-        }
+        scan_chunk_offsets(totals);
         let offsets = View::new(&self.chunk_offsets);
         let starts = ViewMut::new(&mut self.cell_start);
         launch(chunks, |c| scan_chunk(c, SCAN_CHUNK, offsets.at(c), counters, starts));
@@ -78,6 +75,11 @@ impl NeighborGrid {
         let live = self.cell_start[grid.cell_count() as usize] as usize;
         reorder(p, View::new(&self.order[..live]), live);
         n - live
+    }
+
+    /// The start of each cell's run, for a backend that sorted elsewhere to fill in.
+    pub(crate) fn cell_start_mut(&mut self) -> &mut [u32] {
+        &mut self.cell_start
     }
 
     /// The sorted grid for the particles' current order.

@@ -1,6 +1,6 @@
 //! Structure-of-arrays particle storage, allocated once to the run's capacity.
 
-use coil_kernels::view::{Vec3View, Vec3ViewMut, View, ViewMut};
+use coil_kernels::view::{SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::Real;
 
 /// Every per-particle array of a run. Arrays hold `capacity` entries; the first `len` are live.
@@ -121,4 +121,16 @@ pub fn vec3_view_mut<T: Copy>(a: &mut [Vec<T>; 3], len: usize) -> Vec3ViewMut<'_
 
 pub fn view_mut<T: Copy>(a: &mut [T], len: usize) -> ViewMut<'_, T> {
     ViewMut::new(&mut a[..len])
+}
+
+pub fn stress_view_mut<R: Copy>(s: &mut [Vec<R>; 6], n: usize) -> SymTensorViewMut<'_, R> {
+    let [xx, yy, zz, xy, xz, yz] = s;
+    SymTensorViewMut {
+        xx: view_mut(xx, n),
+        yy: view_mut(yy, n),
+        zz: view_mut(zz, n),
+        xy: view_mut(xy, n),
+        xz: view_mut(xz, n),
+        yz: view_mut(yz, n),
+    }
 }

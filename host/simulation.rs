@@ -2,14 +2,15 @@
 //! step through Algorithm 1 on the CPU.
 
 use crate::inlet::Inlet;
-use crate::model::Model;
+use crate::model::{CpuPasses, Model, ParticleState};
 use crate::neighbor_grid::NeighborGrid;
 use crate::parallel::launch;
-use crate::particles::{vec3_view, vec3_view_mut, view_mut, Particles};
+use crate::particles::{stress_view_mut, vec3_view, vec3_view_mut, view_mut, Particles};
 use crate::scene::Scene;
 use crate::setup::{calibrated_mass, InitialParticles};
 use crate::time_step::{Limit, StabilityBound, TimeStepper};
 use coil_kernels::density::{density_pass, DensityArgs};
+use coil_kernels::diagnostics::{range_figures, DiagnosticsArgs, StateFigures};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::{leapfrog_pass, LeapfrogArgs};
 use coil_kernels::nozzle::{nozzle_pass, NozzleArgs, NozzleTube};
@@ -55,35 +56,30 @@ impl fmt::Display for Instability {
     }
 }
 
-/// Figures of the state after a step, over fluid particles.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Diagnostics {
-    /// Largest speed (m/s).
-    pub max_speed: f64,
-    /// Largest |rho - rho0| / rho0.
-    pub max_density_error: f64,
-    /// Fluid particles with a non-finite velocity or a runaway speed.
-    pub bad_particles: usize,
-}
+/// Figures of the state after a step, over fluid particles (see `coil_kernels::diagnostics`).
+pub type Diagnostics = StateFigures;
+
+/// Particles per range of the diagnostics reduction.
+const DIAGNOSTICS_RANGE: usize = 1024;
 
 pub struct Simulation<R: Real, M: Model<R>> {
     pub particles: Particles<R>,
-    grid: NeighborGrid,
+    pub(crate) grid: NeighborGrid,
     pub fluid: Fluid<R>,
     pub model: M,
-    inlets: Vec<Inlet>,
+    pub(crate) inlets: Vec<Inlet>,
     pub stepper: TimeStepper,
     /// Simulated time (s).
     pub time: f64,
     pub steps: u64,
-    previous_dt: Option<f64>,
+    pub(crate) previous_dt: Option<f64>,
     /// Fluid particles removed for leaving the domain box.
     pub removed: u64,
     /// Fluid particles injected by inlets.
     pub injected: u64,
-    fluid_capacity: usize,
-    fluid_count: usize,
-    next_id: u32,
+    pub(crate) fluid_capacity: usize,
+    pub(crate) fluid_count: usize,
+    pub(crate) next_id: u32,
     /// Largest fluid speed after the last step (m/s), which the velocity CFL reads.
     pub diagnostics: Diagnostics,
     /// A speed no particle can reach physically (m/s): twice the free fall across the domain
@@ -207,17 +203,24 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
     /// One step of Algorithm 1 with a given dt (s).
     pub fn step_with(&mut self, dt: f64, limit: Limit) -> Result<(), Instability> {
         // Line 1: inject.
-        for inlet in &mut self.inlets {
-            let budget = self.fluid_capacity - self.fluid_count;
-            let added = inlet.inject(self.time, dt, budget, &mut self.next_id, &mut self.particles);
-            self.fluid_count += added;
-            self.injected += added as u64;
-        }
+        let room = self.fluid_capacity - self.fluid_count;
+        let added = inject(&mut self.inlets, self.time, dt, room, &mut self.next_id, &mut self.particles);
+        self.count_injected(added);
         self.sort_and_density();
+        let kick_dt = self.kick_dt(dt);
         let p = &mut self.particles;
         let n = p.len();
         // Lines 9-16: velocity gradient and stress, accelerations.
-        self.model.accelerations(&self.grid, &self.fluid, p);
+        let state = ParticleState {
+            neighborhood: self.grid.neighborhood(vec3_view(&p.position, n)),
+            fluid: self.fluid,
+            id: View::new(&p.id[..n]),
+            velocity: vec3_view(&p.velocity, n),
+            density: View::new(&p.density[..n]),
+            stress: p.stress.as_mut().map(|s| stress_view_mut(s, n)),
+            acceleration: vec3_view_mut(&mut p.acceleration, n),
+        };
+        self.model.accelerations(&mut CpuPasses { n }, state);
         // Fluid inside a nozzle's tube moves with the jet (paper Sec. III-C; see `nozzle`).
         for inlet in &self.inlets {
             let args = NozzleArgs {
@@ -231,10 +234,6 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             launch(n, |i| nozzle_pass(i, &args));
         }
         // Lines 17-19: leap-frog.
-        let kick_dt = match self.previous_dt {
-            Some(prev) => 0.5 * (prev + dt),
-            None => 0.5 * dt,
-        };
         {
             let args = LeapfrogArgs {
                 fluid: self.fluid,
@@ -248,32 +247,61 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             };
             launch(n, |i| leapfrog_pass(i, &args));
         }
+        self.advance_clock(dt, limit);
+        self.diagnostics = self.measure();
+        self.check()
+    }
+
+    /// Counts particles an inlet just added.
+    pub(crate) fn count_injected(&mut self, added: usize) {
+        self.fluid_count += added;
+        self.injected += added as u64;
+    }
+
+    /// Counts particles the sort dropped for leaving the domain.
+    pub(crate) fn count_removed(&mut self, removed: usize) {
+        self.removed += removed as u64;
+        self.fluid_count -= removed;
+    }
+
+    /// Leap-frog's kick: half of this and the previous step (half of this one at the start).
+    pub(crate) fn kick_dt(&self, dt: f64) -> f64 {
+        match self.previous_dt {
+            Some(prev) => 0.5 * (prev + dt),
+            None => 0.5 * dt,
+        }
+    }
+
+    /// The clock after a step of `dt` (s) limited by `limit`.
+    pub(crate) fn advance_clock(&mut self, dt: f64, limit: Limit) {
         self.previous_dt = Some(dt);
         self.time += dt;
         self.steps += 1;
         self.last_dt = dt;
         self.last_limit = limit;
-        self.diagnostics = self.measure();
-        if self.diagnostics.bad_particles > 0 {
-            return Err(Instability {
-                step: self.steps,
-                time_s: self.time,
-                bad_particles: self.diagnostics.bad_particles,
-                max_speed_m_s: self.diagnostics.max_speed,
-                runaway_speed_m_s: self.runaway_speed,
-                dt_s: dt,
-                stability_bound_s: self.stepper.bound.dt().0,
-            });
+    }
+
+    /// The guard: the latest diagnostics must show no runaway particle.
+    pub(crate) fn check(&self) -> Result<(), Instability> {
+        if self.diagnostics.bad_particles == 0 {
+            return Ok(());
         }
-        Ok(())
+        Err(Instability {
+            step: self.steps,
+            time_s: self.time,
+            bad_particles: self.diagnostics.bad_particles as usize,
+            max_speed_m_s: self.diagnostics.max_speed,
+            runaway_speed_m_s: self.runaway_speed,
+            dt_s: self.last_dt,
+            stability_bound_s: self.stepper.bound.dt().0,
+        })
     }
 
     /// Algorithm 1, line 3: neighbors, dropping particles that left the domain; lines 5-8:
     /// density (pressure is evaluated from it where it is read).
     fn sort_and_density(&mut self) {
         let removed = self.grid.sort(&mut self.particles);
-        self.removed += removed as u64;
-        self.fluid_count -= removed;
+        self.count_removed(removed);
         let p = &mut self.particles;
         let n = p.len();
         let args = DensityArgs {
@@ -288,28 +316,32 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
     pub fn measure(&self) -> Diagnostics {
         let p = &self.particles;
         let n = p.len();
-        let v = vec3_view(&p.velocity, n);
-        let id = p.id_view();
-        let rho0 = self.fluid.rest_density.to_f64();
-        let runaway2 = self.runaway_speed * self.runaway_speed;
-        (0..n)
+        let args = self.diagnostics_args();
+        (0..n.div_ceil(DIAGNOSTICS_RANGE))
             .into_par_iter()
-            .with_min_len(1024)
-            .filter(|&i| !self.fluid.is_boundary(id.at(i)))
-            .map(|i| {
-                let [x, y, z] = v.at(i).map(|c| c.to_f64());
-                let speed2 = x * x + y * y + z * z;
-                let finite = speed2.is_finite();
-                Diagnostics {
-                    max_speed: if finite { speed2.sqrt() } else { 0.0 },
-                    max_density_error: (p.density[i].to_f64() - rho0).abs() / rho0,
-                    bad_particles: usize::from(!finite || speed2 > runaway2),
-                }
-            })
-            .reduce(Diagnostics::default, |a, b| Diagnostics {
-                max_speed: a.max_speed.max(b.max_speed),
-                max_density_error: a.max_density_error.max(b.max_density_error),
-                bad_particles: a.bad_particles + b.bad_particles,
-            })
+            .map(|r| range_figures(r, DIAGNOSTICS_RANGE, n, &args))
+            .reduce(Diagnostics::default, Diagnostics::combine)
     }
+
+    /// The diagnostics pass's arguments for the host particles.
+    fn diagnostics_args(&self) -> DiagnosticsArgs<'_, R> {
+        let p = &self.particles;
+        DiagnosticsArgs {
+            fluid: self.fluid,
+            runaway_speed2: self.runaway_speed * self.runaway_speed,
+            id: p.id_view(),
+            velocity: p.velocity_view(),
+            density: p.density_view(),
+        }
+    }
+}
+
+/// Algorithm 1, line 1: every inlet appends the layers due after `dt` from `time` to `p`,
+/// within `room` particles in all. Returns how many it added.
+pub(crate) fn inject<R: Real>(inlets: &mut [Inlet], time: f64, dt: f64, room: usize, next_id: &mut u32, p: &mut Particles<R>) -> usize {
+    let mut added = 0;
+    for inlet in inlets {
+        added += inlet.inject(time, dt, room - added, next_id, p);
+    }
+    added
 }

@@ -11,6 +11,8 @@ use crate::view::{SymTensorView, Vec3View, Vec3ViewMut, View};
 /// A discretisation of the viscous acceleration (1/rho) div tau. The operator is a type
 /// parameter of the acceleration pass, chosen once per run.
 pub trait ViscousOperator<R: Real>: Copy + Send + Sync {
+    /// The operator's name in PTX kernel names (`acceleration_<NAME>_f32`).
+    const NAME: &'static str;
     /// What the operator reads of particle i once, before its neighbor loop.
     type Own: Copy;
     fn own(&self, i: usize, density_i: R) -> Self::Own;
@@ -37,6 +39,7 @@ impl<'a, R: Real> StressDivergence<'a, R> {
 }
 
 impl<R: Real> ViscousOperator<R> for StressDivergence<'_, R> {
+    const NAME: &'static str = "stress";
     type Own = SymTensor<R>;
     #[inline(always)]
     fn own(&self, i: usize, density_i: R) -> SymTensor<R> {
@@ -61,6 +64,7 @@ pub struct VelocityLaplacian<'a, R> {
 }
 
 impl<R: Real> ViscousOperator<R> for VelocityLaplacian<'_, R> {
+    const NAME: &'static str = "laplacian";
     type Own = Vec3<R>;
     #[inline(always)]
     fn own(&self, i: usize, _density_i: R) -> Vec3<R> {

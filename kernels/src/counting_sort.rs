@@ -76,6 +76,19 @@ pub fn chunk_total(chunk: usize, chunk_len: usize, counts: Counters) -> u32 {
     (start..end).map(|k| counts.load(k)).sum()
 }
 
+/// Exclusive scan of the chunk totals into chunk offsets, in place (the middle pass, serial:
+/// one invocation over a few hundred chunks).
+#[inline(always)]
+pub fn scan_chunk_offsets(totals: ViewMut<u32>) {
+    let mut running = 0u32;
+    for c in 0..totals.len() {
+        let total = totals.at(c);
+        // SAFETY: the single invocation owns every entry.
+        unsafe { totals.write(c, running) };
+        running += total;
+    }
+}
+
 /// Exclusive scan of chunk `chunk`, offset by the total of all earlier chunks (second pass).
 /// Writes `bucket_start[k]` for the chunk's buckets, the cursor the scatter advances
 /// (`counts[k] = bucket_start[k]`), and, from the last chunk, the grand total.

@@ -5,6 +5,8 @@ use crate::real::Real;
 /// A viscosity law nu(D). The law is a type parameter of the stress kernel, so a Newtonian run
 /// never evaluates the Cross model (not even a branch per particle).
 pub trait Rheology<R: Real>: Copy + Send + Sync {
+    /// The law's name in PTX kernel names (`stress_<NAME>_f32`).
+    const NAME: &'static str;
     /// Kinematic viscosity (m^2/s) at shear rate `shear_rate` (1/s).
     fn viscosity(&self, shear_rate: R) -> R;
     /// The largest viscosity the law reaches (m^2/s), which bounds dt by Eq. (10).
@@ -20,6 +22,7 @@ pub struct Newtonian<R> {
 }
 
 impl<R: Real> Rheology<R> for Newtonian<R> {
+    const NAME: &'static str = "newtonian";
     #[inline(always)]
     fn viscosity(&self, _shear_rate: R) -> R {
         self.nu0
@@ -45,6 +48,7 @@ pub struct Cross<R> {
 }
 
 impl<R: Real> Rheology<R> for Cross<R> {
+    const NAME: &'static str = "cross";
     #[inline(always)]
     fn viscosity(&self, shear_rate: R) -> R {
         let kd = self.k * shear_rate;

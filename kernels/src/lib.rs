@@ -8,7 +8,7 @@
 //! particle field, [`density::density_pass`] (Eq. 5, 6), [`velocity_gradient::stress_pass`]
 //! (Eq. 8, 2, 3; the paper's operator only), [`acceleration::acceleration_pass`] (Eq. 7, 9 or
 //! Müller's Laplacian, gravity), [`nozzle::nozzle_pass`] (jet scenes only) and
-//! [`leapfrog::leapfrog_pass`].
+//! [`leapfrog::leapfrog_pass`]; then [`diagnostics`] guards the run.
 #![no_std]
 #![cfg_attr(target_arch = "nvptx64", feature(abi_ptx, link_llvm_intrinsics, stdarch_nvptx))]
 // `link_llvm_intrinsics` is how the device reaches NVVM's fast math (see `real`).
@@ -22,6 +22,7 @@ pub mod cell_grid;
 pub mod counting_sort;
 pub mod cross_viscosity;
 pub mod density;
+pub mod diagnostics;
 pub mod fluid;
 pub mod leapfrog;
 pub mod nozzle;

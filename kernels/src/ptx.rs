@@ -1,12 +1,17 @@
 //! PTX entry points: one thread per particle (or cell, or scan chunk), each calling the same
 //! function the CPU backend runs. Names carry the precision and, where there is one, the
 //! physics variant, so the host picks the kernel of its run once.
+//!
+//! Per-particle kernels read the particle count from device memory (`count`), because the
+//! sort drops particles that left the domain on the device: the host launches enough threads
+//! for an upper bound and never waits for the count inside a step.
 
 use crate::acceleration::{acceleration_pass, AccelerationArgs, StressDivergence, VelocityLaplacian};
 use crate::cell_grid::{hash_pass, HashArgs};
-use crate::counting_sort::{chunk_total, count_particle, gather, scan_chunk, scatter, sort_bucket, Counters};
+use crate::counting_sort::{chunk_total, count_particle, gather, scan_chunk, scan_chunk_offsets, scatter, sort_bucket, Counters};
 use crate::cross_viscosity::{Cross, Newtonian};
 use crate::density::{density_pass, DensityArgs};
+use crate::diagnostics::{diagnostics_pass, DiagnosticsArgs, StateFigures};
 use crate::leapfrog::{leapfrog_pass, LeapfrogArgs};
 use crate::nozzle::{nozzle_pass, NozzleArgs};
 use crate::velocity_gradient::{stress_pass, StressArgs};
@@ -29,9 +34,9 @@ fn thread_index() -> usize {
 macro_rules! per_index_kernel {
     ($name:ident, $args:ty, $pass:expr) => {
         #[no_mangle]
-        pub unsafe extern "ptx-kernel" fn $name(n: u32, args: $args) {
+        pub unsafe extern "ptx-kernel" fn $name(count: View<'static, u32>, args: $args) {
             let i = thread_index();
-            if i < n as usize {
+            if i < count.at(0) as usize {
                 $pass(i, &args);
             }
         }
@@ -71,9 +76,13 @@ per_index_kernel!(leapfrog_f32, LeapfrogArgs<'static, f32>, leapfrog_pass::<f32>
 per_index_kernel!(leapfrog_f64, LeapfrogArgs<'static, f64>, leapfrog_pass::<f64>);
 
 #[no_mangle]
-pub unsafe extern "ptx-kernel" fn count_particles(n: u32, cell_key: View<'static, u32>, counts: Counters<'static>) {
+pub unsafe extern "ptx-kernel" fn count_particles(
+    count: View<'static, u32>,
+    cell_key: View<'static, u32>,
+    counts: Counters<'static>,
+) {
     let i = thread_index();
-    if i < n as usize {
+    if i < count.at(0) as usize {
         count_particle(i, cell_key, counts);
     }
 }
@@ -88,6 +97,13 @@ pub unsafe extern "ptx-kernel" fn scan_chunk_totals(
     let c = thread_index();
     if c < chunks as usize {
         totals.write(c, chunk_total(c, chunk_len as usize, counts));
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "ptx-kernel" fn scan_offsets(totals: ViewMut<'static, u32>) {
+    if thread_index() == 0 {
+        scan_chunk_offsets(totals);
     }
 }
 
@@ -107,13 +123,13 @@ pub unsafe extern "ptx-kernel" fn scan_chunks(
 
 #[no_mangle]
 pub unsafe extern "ptx-kernel" fn scatter_particles(
-    n: u32,
+    count: View<'static, u32>,
     cell_key: View<'static, u32>,
     cursor: Counters<'static>,
     order: ViewMut<'static, u32>,
 ) {
     let i = thread_index();
-    if i < n as usize {
+    if i < count.at(0) as usize {
         scatter(i, cell_key, cursor, order);
     }
 }
@@ -130,13 +146,13 @@ macro_rules! gather_kernel {
     ($name:ident, $t:ty) => {
         #[no_mangle]
         pub unsafe extern "ptx-kernel" fn $name(
-            n: u32,
+            count: View<'static, u32>,
             order: View<'static, u32>,
             unsorted: View<'static, $t>,
             sorted: ViewMut<'static, $t>,
         ) {
             let k = thread_index();
-            if k < n as usize {
+            if k < count.at(0) as usize {
                 gather(k, order, unsorted, sorted);
             }
         }
@@ -146,3 +162,62 @@ macro_rules! gather_kernel {
 gather_kernel!(gather_u32, u32);
 gather_kernel!(gather_f32, f32);
 gather_kernel!(gather_f64, f64);
+
+/// After the sort: the live count is the start of the bucket of particles outside the domain.
+#[no_mangle]
+pub unsafe extern "ptx-kernel" fn set_count(count: ViewMut<'static, u32>, bucket_start: View<'static, u32>, cells: u32) {
+    if thread_index() == 0 {
+        count.write(0, bucket_start.at(cells as usize));
+    }
+}
+
+/// After new inlet particles were appended behind the live ones.
+#[no_mangle]
+pub unsafe extern "ptx-kernel" fn grow_count(count: ViewMut<'static, u32>, added: u32) {
+    if thread_index() == 0 {
+        count.write(0, count.at(0) + added);
+    }
+}
+
+macro_rules! append_kernel {
+    ($name:ident, $t:ty) => {
+        /// Copies `added` staged inlet particles' values behind the `count` live ones.
+        #[no_mangle]
+        pub unsafe extern "ptx-kernel" fn $name(
+            count: View<'static, u32>,
+            added: u32,
+            staged: View<'static, $t>,
+            field: ViewMut<'static, $t>,
+        ) {
+            let j = thread_index();
+            if j < added as usize {
+                field.write(count.at(0) as usize + j, staged.at(j));
+            }
+        }
+    };
+}
+
+append_kernel!(append_u32, u32);
+append_kernel!(append_f32, f32);
+append_kernel!(append_f64, f64);
+
+macro_rules! diagnostics_kernel {
+    ($name:ident, $t:ty) => {
+        #[no_mangle]
+        pub unsafe extern "ptx-kernel" fn $name(
+            count: View<'static, u32>,
+            range_len: u32,
+            args: DiagnosticsArgs<'static, $t>,
+            out: ViewMut<'static, StateFigures>,
+        ) {
+            let n = count.at(0) as usize;
+            let r = thread_index();
+            if r * (range_len as usize) < n {
+                diagnostics_pass(r, range_len as usize, n, &args, out);
+            }
+        }
+    };
+}
+
+diagnostics_kernel!(diagnostics_f32, f32);
+diagnostics_kernel!(diagnostics_f64, f64);

@@ -217,3 +217,21 @@ impl<T> Clone for SymTensorViewMut<'_, T> {
     }
 }
 impl<T> Copy for SymTensorViewMut<'_, T> {}
+
+impl<'a, T: Copy> SymTensorViewMut<'a, T> {
+    /// The same arrays, read-only: what a later pass reads of what this one wrote.
+    #[inline(always)]
+    pub fn read(&self) -> SymTensorView<'a, T> {
+        // SAFETY: the arrays outlive 'a; backends run passes one after another.
+        unsafe {
+            SymTensorView {
+                xx: View::from_raw(self.xx.ptr, self.xx.len),
+                yy: View::from_raw(self.yy.ptr, self.yy.len),
+                zz: View::from_raw(self.zz.ptr, self.zz.len),
+                xy: View::from_raw(self.xy.ptr, self.xy.len),
+                xz: View::from_raw(self.xz.ptr, self.xz.len),
+                yz: View::from_raw(self.yz.ptr, self.yz.len),
+            }
+        }
+    }
+}

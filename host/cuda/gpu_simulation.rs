@@ -1,0 +1,497 @@
+//! One run on a CUDA device: every step of Algorithm 1 runs there as the PTX kernels of
+//! `kernels/`, on structure-of-arrays buffers preallocated to the run's capacity.
+//!
+//! The host keeps the clock, the inlets and the time step (`Simulation`'s own fields); its
+//! particle arrays are a mirror filled only for output frames. Inside a step nothing waits for
+//! the device: kernels read the particle count from device memory, and the host launches
+//! threads for an upper bound (`bound`). Every `check_every` steps, and before every frame, the
+//! host reads the diagnostics (largest speed, density error, runaway particles) and the count.
+
+use super::device_array::{vec3_view, vec3_view_mut, vec3_zeros, DeviceArray, DeviceVec3};
+use super::gpu::{ByValue, CudaError, Gpu};
+use crate::model::{Model, ParticleState, Passes};
+use crate::particles::Particles;
+use crate::simulation::{inject, Instability, Simulation};
+use crate::time_step::Limit;
+use coil_kernels::acceleration::{AccelerationArgs, ViscousOperator};
+use coil_kernels::cell_grid::{HashArgs, Neighborhood};
+use coil_kernels::cross_viscosity::Rheology;
+use coil_kernels::density::DensityArgs;
+use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
+use coil_kernels::leapfrog::LeapfrogArgs;
+use coil_kernels::nozzle::NozzleArgs;
+use coil_kernels::velocity_gradient::StressArgs;
+use coil_kernels::view::{SymTensorViewMut, View};
+use coil_kernels::Real;
+use std::fmt;
+
+/// Buckets per scan chunk on the device: more, shorter chunks than on the CPU keep the serial
+/// chunk loops short.
+const SCAN_CHUNK: usize = 512;
+
+/// Particles per range of the diagnostics reduction.
+const DIAGNOSTICS_RANGE: usize = 256;
+
+/// Why a GPU step failed.
+#[derive(Debug)]
+pub enum GpuStepError {
+    Unstable(Instability),
+    Cuda(CudaError),
+}
+
+impl fmt::Display for GpuStepError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            GpuStepError::Unstable(i) => i.fmt(f),
+            GpuStepError::Cuda(e) => e.fmt(f),
+        }
+    }
+}
+
+impl From<CudaError> for GpuStepError {
+    fn from(e: CudaError) -> Self {
+        GpuStepError::Cuda(e)
+    }
+}
+
+/// Particle and grid state on the device.
+struct DeviceState<R> {
+    position: DeviceVec3<f64>,
+    velocity: DeviceVec3<R>,
+    velocity_half: DeviceVec3<R>,
+    acceleration: DeviceVec3<R>,
+    density: DeviceArray<R>,
+    id: DeviceArray<u32>,
+    stress: Option<[DeviceArray<R>; 6]>,
+    scratch_f64: DeviceArray<f64>,
+    scratch_real: DeviceArray<R>,
+    scratch_u32: DeviceArray<u32>,
+    cell_key: DeviceArray<u32>,
+    counters: DeviceArray<u32>,
+    cell_start: DeviceArray<u32>,
+    order: DeviceArray<u32>,
+    chunk_offsets: DeviceArray<u32>,
+    /// The live particle count (one entry).
+    count: DeviceArray<u32>,
+    /// Inlet layers of this step, before they are appended.
+    staged_position: DeviceVec3<f64>,
+    staged_velocity: DeviceVec3<R>,
+    staged_id: DeviceArray<u32>,
+    /// One `StateFigures` per diagnostics range.
+    figures: DeviceArray<StateFigures>,
+}
+
+impl<R: Real> DeviceState<R> {
+    fn new(gpu: &Gpu, capacity: usize, buckets: usize, staged: usize, with_stress: bool) -> Result<Self, CudaError> {
+        let stress = if with_stress {
+            Some([
+                DeviceArray::zeros(gpu, capacity, "stress")?,
+                DeviceArray::zeros(gpu, capacity, "stress")?,
+                DeviceArray::zeros(gpu, capacity, "stress")?,
+                DeviceArray::zeros(gpu, capacity, "stress")?,
+                DeviceArray::zeros(gpu, capacity, "stress")?,
+                DeviceArray::zeros(gpu, capacity, "stress")?,
+            ])
+        } else {
+            None
+        };
+        Ok(Self {
+            position: vec3_zeros(gpu, capacity, "positions")?,
+            velocity: vec3_zeros(gpu, capacity, "velocities")?,
+            velocity_half: vec3_zeros(gpu, capacity, "half-step velocities")?,
+            acceleration: vec3_zeros(gpu, capacity, "accelerations")?,
+            density: DeviceArray::zeros(gpu, capacity, "densities")?,
+            id: DeviceArray::zeros(gpu, capacity, "ids")?,
+            stress,
+            scratch_f64: DeviceArray::zeros(gpu, capacity, "sort scratch")?,
+            scratch_real: DeviceArray::zeros(gpu, capacity, "sort scratch")?,
+            scratch_u32: DeviceArray::zeros(gpu, capacity, "sort scratch")?,
+            cell_key: DeviceArray::zeros(gpu, capacity, "cell keys")?,
+            counters: DeviceArray::zeros(gpu, buckets, "cell counters")?,
+            cell_start: DeviceArray::zeros(gpu, buckets + 1, "cell starts")?,
+            order: DeviceArray::zeros(gpu, capacity, "sort order")?,
+            chunk_offsets: DeviceArray::zeros(gpu, buckets.div_ceil(SCAN_CHUNK), "scan chunks")?,
+            count: DeviceArray::zeros(gpu, 1, "particle count")?,
+            staged_position: vec3_zeros(gpu, staged, "inlet layers")?,
+            staged_velocity: vec3_zeros(gpu, staged, "inlet layers")?,
+            staged_id: DeviceArray::zeros(gpu, staged, "inlet layers")?,
+            figures: DeviceArray::zeros(gpu, capacity.div_ceil(DIAGNOSTICS_RANGE), "diagnostics")?,
+        })
+    }
+
+    fn bytes(&self) -> usize {
+        let v3 = |a: &DeviceVec3<f64>| a.iter().map(DeviceArray::bytes).sum::<usize>();
+        let r3 = |a: &DeviceVec3<R>| a.iter().map(DeviceArray::bytes).sum::<usize>();
+        v3(&self.position)
+            + r3(&self.velocity)
+            + r3(&self.velocity_half)
+            + r3(&self.acceleration)
+            + self.density.bytes()
+            + self.id.bytes()
+            + self.stress.as_ref().map_or(0, |s| s.iter().map(DeviceArray::bytes).sum())
+            + self.scratch_f64.bytes()
+            + self.scratch_real.bytes()
+            + self.scratch_u32.bytes()
+            + self.cell_key.bytes()
+            + self.counters.bytes()
+            + self.cell_start.bytes()
+            + self.order.bytes()
+            + self.chunk_offsets.bytes()
+            + v3(&self.staged_position)
+            + r3(&self.staged_velocity)
+            + self.staged_id.bytes()
+            + self.figures.bytes()
+    }
+
+    fn stress_view(&self, n: usize) -> Option<SymTensorViewMut<'static, R>> {
+        self.stress.as_ref().map(|[xx, yy, zz, xy, xz, yz]| SymTensorViewMut {
+            xx: xx.view_mut(n),
+            yy: yy.view_mut(n),
+            zz: zz.view_mut(n),
+            xy: xy.view_mut(n),
+            xz: xz.view_mut(n),
+            yz: yz.view_mut(n),
+        })
+    }
+}
+
+/// The PTX entry of a pass in precision `R`: `stem_R`, or `stem_variant_R` (e.g.
+/// `stress_cross_f32`). Names are few and fixed: each is built once and kept.
+fn kernel<R: Real>(stem: &'static str, variant: &'static str) -> &'static str {
+    use std::collections::HashMap;
+    use std::sync::{Mutex, OnceLock};
+    type Names = HashMap<(&'static str, &'static str, &'static str), &'static str>;
+    static NAMES: OnceLock<Mutex<Names>> = OnceLock::new();
+    let mut names = NAMES.get_or_init(Default::default).lock().unwrap_or_else(|e| e.into_inner());
+    names.entry((stem, variant, R::NAME)).or_insert_with(|| {
+        let name = if variant.is_empty() { format!("{stem}_{}", R::NAME) } else { format!("{stem}_{variant}_{}", R::NAME) };
+        Box::leak(name.into_boxed_str())
+    })
+}
+
+/// The model's passes as launches of the model's kernels.
+struct GpuPasses<'g> {
+    gpu: &'g mut Gpu,
+    count: View<'static, u32>,
+    threads: u32,
+    result: Result<(), CudaError>,
+}
+
+impl GpuPasses<'_> {
+    fn run<A: Copy>(&mut self, name: &'static str, args: A) {
+        if self.result.is_ok() {
+            // SAFETY: the argument struct is the entry's, built over the run's device arrays.
+            self.result = unsafe { self.gpu.launch(name, self.threads, &[&ByValue(self.count), &ByValue(args)]) };
+        }
+    }
+}
+
+impl<R: Real> Passes<R> for GpuPasses<'_> {
+    fn stress<Rh: Rheology<R>>(&mut self, args: StressArgs<'_, R, Rh>) {
+        self.run(kernel::<R>("stress", Rh::NAME), args);
+    }
+    fn acceleration<Op: ViscousOperator<R>>(&mut self, args: AccelerationArgs<'_, R, Op>) {
+        self.run(kernel::<R>("acceleration", Op::NAME), args);
+    }
+}
+
+pub struct GpuSimulation<R: Real, M: Model<R>> {
+    /// Clock, inlets, time step and counters; its particles mirror the device at frames.
+    pub host: Simulation<R, M>,
+    gpu: Gpu,
+    device: DeviceState<R>,
+    /// Host staging of this step's inlet layers.
+    staged: Particles<R>,
+    /// No more particles than this are live on the device.
+    bound: usize,
+    /// Steps between reads of the diagnostics.
+    pub check_every: u64,
+    figures: Vec<StateFigures>,
+}
+
+impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
+    /// Moves the run `host` (set up and sorted on the host) onto `gpu`.
+    pub fn new(host: Simulation<R, M>, gpu: Gpu) -> Result<Self, CudaError> {
+        let capacity = host.particles.capacity();
+        let buckets = host.grid.grid.cell_count() as usize + 1;
+        // Four layers of every inlet per step is far above what dt at the Eq. (10) bound brings.
+        let staged_capacity = 4 * host.inlets().iter().map(|i| i.layer_size()).sum::<usize>();
+        let device = DeviceState::new(&gpu, capacity, buckets, staged_capacity, M::USES_STRESS)?;
+        let mut sim = Self {
+            bound: host.particles.len(),
+            staged: Particles::with_capacity(staged_capacity, false),
+            figures: vec![StateFigures::default(); device.figures.len()],
+            host,
+            gpu,
+            device,
+            check_every: 10,
+        };
+        sim.upload()?;
+        Ok(sim)
+    }
+
+    /// The device and its name, for logs.
+    pub fn device_name(&self) -> String {
+        self.gpu.describe()
+    }
+
+    /// Bytes of device memory the run allocated.
+    pub fn device_bytes(&self) -> usize {
+        self.device.bytes()
+    }
+
+    /// Copies the host's particles and sorted grid to the device.
+    fn upload(&mut self) -> Result<(), CudaError> {
+        let p = &self.host.particles;
+        let n = p.len();
+        let (gpu, d) = (&self.gpu, &mut self.device);
+        for a in 0..3 {
+            d.position[a].upload(gpu, &p.position[a][..n])?;
+            d.velocity[a].upload(gpu, &p.velocity[a][..n])?;
+            d.velocity_half[a].upload(gpu, &p.velocity_half[a][..n])?;
+        }
+        d.id.upload(gpu, &p.id[..n])?;
+        d.density.upload(gpu, &p.density[..n])?;
+        d.cell_start.upload(gpu, self.host.grid.cell_start_mut())?;
+        d.count.upload(gpu, &[n as u32])?;
+        gpu.synchronize()
+    }
+
+    /// Brings the host mirror up to date: particles in sorted order and the grid (for frames).
+    pub fn download(&mut self) -> Result<(), GpuStepError> {
+        self.read_diagnostics()?;
+        let n = self.bound;
+        let (gpu, d) = (&self.gpu, &self.device);
+        let p = &mut self.host.particles;
+        p.set_len(n);
+        for a in 0..3 {
+            d.position[a].download(gpu, &mut p.position[a][..n])?;
+            d.velocity[a].download(gpu, &mut p.velocity[a][..n])?;
+            d.velocity_half[a].download(gpu, &mut p.velocity_half[a][..n])?;
+            d.acceleration[a].download(gpu, &mut p.acceleration[a][..n])?;
+        }
+        d.id.download(gpu, &mut p.id[..n])?;
+        d.density.download(gpu, &mut p.density[..n])?;
+        let cells = self.host.grid.cell_start_mut();
+        d.cell_start.download(gpu, cells)?;
+        Ok(())
+    }
+
+    /// dt for the next step and what limits it (from the speed of the last check).
+    pub fn next_dt(&self) -> (f64, Limit) {
+        self.host.next_dt()
+    }
+
+    /// One step of Algorithm 1 on the device with a given dt (s).
+    pub fn step_with(&mut self, dt: f64, limit: Limit) -> Result<(), GpuStepError> {
+        self.inject(dt)?;
+        self.sort()?;
+        self.density()?;
+        let n = self.bound;
+        let d = &self.device;
+        let state = ParticleState {
+            neighborhood: self.neighborhood(),
+            fluid: self.host.fluid,
+            id: d.id.view(n),
+            velocity: vec3_view(&d.velocity, n),
+            density: d.density.view(n),
+            stress: d.stress_view(n),
+            acceleration: vec3_view_mut(&d.acceleration, n),
+        };
+        let mut passes = GpuPasses { gpu: &mut self.gpu, count: d.count.view(1), threads: n as u32, result: Ok(()) };
+        self.host.model.accelerations(&mut passes, state);
+        passes.result?;
+        self.nozzles()?;
+        self.leapfrog(dt)?;
+        self.host.advance_clock(dt, limit);
+        if self.host.steps % self.check_every == 0 {
+            self.read_diagnostics()?;
+        }
+        Ok(())
+    }
+
+    /// Reads the device's diagnostics and particle count; stops an unstable run.
+    pub fn read_diagnostics(&mut self) -> Result<(), GpuStepError> {
+        let n = self.bound;
+        let d = &self.device;
+        let args = DiagnosticsArgs {
+            fluid: self.host.fluid,
+            runaway_speed2: self.host.runaway_speed * self.host.runaway_speed,
+            id: d.id.view(n),
+            velocity: vec3_view(&d.velocity, n),
+            density: d.density.view(n),
+        };
+        let ranges = n.div_ceil(DIAGNOSTICS_RANGE);
+        let out = ByValue(self.device.figures.view_mut(ranges));
+        let count = self.count();
+        // SAFETY: diagnostics_<R>(count, range_len, args, out), `out` holding one figure per range.
+        unsafe {
+            self.gpu.launch(
+                kernel::<R>("diagnostics", ""),
+                ranges as u32,
+                &[&count, &ByValue(DIAGNOSTICS_RANGE as u32), &ByValue(args), &out],
+            )?;
+        }
+        let mut live = [0u32];
+        self.device.count.download(&self.gpu, &mut live)?;
+        let live = live[0] as usize;
+        let figures = &mut self.figures[..live.div_ceil(DIAGNOSTICS_RANGE)];
+        self.device.figures.download(&self.gpu, figures)?;
+        self.host.diagnostics = figures.iter().fold(StateFigures::default(), |a, &b| a.combine(b));
+        let fluid_now = live - self.host.boundary_count();
+        let removed = self.host.fluid_count() - fluid_now;
+        self.host.count_removed(removed);
+        self.bound = live;
+        self.host.check().map_err(GpuStepError::Unstable)
+    }
+
+    fn count(&self) -> ByValue<View<'static, u32>> {
+        ByValue(self.device.count.view(1))
+    }
+
+    fn neighborhood(&self) -> Neighborhood<'static> {
+        Neighborhood {
+            grid: self.host.grid.grid,
+            cell_start: self.device.cell_start.view(self.device.cell_start.len()),
+            position: vec3_view(&self.device.position, self.bound),
+        }
+    }
+
+    /// Line 1: layers generated on the host, uploaded and appended behind the live particles.
+    fn inject(&mut self, dt: f64) -> Result<(), CudaError> {
+        self.staged.set_len(0);
+        let host = &mut self.host;
+        let room = (host.fluid_capacity() - host.fluid_count()).min(self.staged.capacity());
+        let added = inject(&mut host.inlets, host.time, dt, room, &mut host.next_id, &mut self.staged);
+        if added == 0 {
+            return Ok(());
+        }
+        host.count_injected(added);
+        let (gpu, d, s) = (&mut self.gpu, &mut self.device, &self.staged);
+        let count = ByValue(d.count.view(1));
+        let k = ByValue(added as u32);
+        for a in 0..3 {
+            d.staged_position[a].upload(gpu, &s.position[a][..added])?;
+            d.staged_velocity[a].upload(gpu, &s.velocity[a][..added])?;
+        }
+        d.staged_id.upload(gpu, &s.id[..added])?;
+        let capacity = d.id.len();
+        // SAFETY: append_<T>(count, added, staged, field) over arrays of the run's capacity,
+        // which the budget above keeps the appended particles within.
+        unsafe {
+            for a in 0..3 {
+                let staged_x = ByValue(d.staged_position[a].view(added));
+                gpu.launch("append_f64", added as u32, &[&count, &k, &staged_x, &ByValue(d.position[a].view_mut(capacity))])?;
+                let staged_v = ByValue(d.staged_velocity[a].view(added));
+                for target in [&d.velocity[a], &d.velocity_half[a]] {
+                    gpu.launch(kernel::<R>("append", ""), added as u32, &[&count, &k, &staged_v, &ByValue(target.view_mut(capacity))])?;
+                }
+            }
+            let staged_id = ByValue(d.staged_id.view(added));
+            gpu.launch("append_u32", added as u32, &[&count, &k, &staged_id, &ByValue(d.id.view_mut(capacity))])?;
+            gpu.launch("grow_count", 1, &[&ByValue(d.count.view_mut(1)), &k])?;
+        }
+        self.bound += added;
+        Ok(())
+    }
+
+    /// Line 3: the counting sort by cell on the device, then the reorder of every field that
+    /// carries state. Particles outside the domain fall into the last bucket and drop out.
+    fn sort(&mut self) -> Result<(), CudaError> {
+        let n = self.bound;
+        let threads = n as u32;
+        let count = self.count();
+        let grid = self.host.grid.grid;
+        let cells = grid.cell_count();
+        let d = &mut self.device;
+        let gpu = &mut self.gpu;
+        d.counters.clear(gpu)?;
+        let chunks = d.chunk_offsets.len();
+        let buckets = d.counters.len();
+        let hash = HashArgs { grid, position: vec3_view(&d.position, n), cell_key: d.cell_key.view_mut(n) };
+        let keys = ByValue(d.cell_key.view(n));
+        let counters = ByValue(d.counters.counters());
+        let chunk = ByValue(SCAN_CHUNK as u32);
+        // SAFETY: each argument list is its entry's in `coil_kernels::ptx`, over arrays sized
+        // to the capacity (particles) or to the grid (buckets, chunks).
+        unsafe {
+            gpu.launch("hash", threads, &[&count, &ByValue(hash)])?;
+            gpu.launch("count_particles", threads, &[&count, &keys, &counters])?;
+            let totals = ByValue(d.chunk_offsets.view_mut(chunks));
+            gpu.launch("scan_chunk_totals", chunks as u32, &[&ByValue(chunks as u32), &chunk, &counters, &totals])?;
+            gpu.launch("scan_offsets", 1, &[&totals])?;
+            let offsets = ByValue(d.chunk_offsets.view(chunks));
+            let starts = ByValue(d.cell_start.view_mut(buckets + 1));
+            gpu.launch("scan_chunks", chunks as u32, &[&ByValue(chunks as u32), &chunk, &offsets, &counters, &starts])?;
+            gpu.launch("scatter_particles", threads, &[&count, &keys, &counters, &ByValue(d.order.view_mut(n))])?;
+            let starts = ByValue(d.cell_start.view(buckets + 1));
+            gpu.launch("sort_buckets", cells, &[&ByValue(cells), &starts, &ByValue(d.order.view_mut(n))])?;
+            gpu.launch("set_count", 1, &[&ByValue(d.count.view_mut(1)), &starts, &ByValue(cells)])?;
+        }
+        let order = ByValue(d.order.view(n));
+        let capacity = d.id.len();
+        // SAFETY: gather_<T>(count, order, unsorted, sorted) with `count` now the live count.
+        unsafe {
+            for a in 0..3 {
+                gpu.launch("gather_f64", threads, &[&count, &order, &ByValue(d.position[a].view(capacity)), &ByValue(d.scratch_f64.view_mut(n))])?;
+                std::mem::swap(&mut d.position[a], &mut d.scratch_f64);
+                for field in [&mut d.velocity[a], &mut d.velocity_half[a]] {
+                    let sorted = ByValue(d.scratch_real.view_mut(n));
+                    gpu.launch(kernel::<R>("gather", ""), threads, &[&count, &order, &ByValue(field.view(capacity)), &sorted])?;
+                    std::mem::swap(field, &mut d.scratch_real);
+                }
+            }
+            gpu.launch("gather_u32", threads, &[&count, &order, &ByValue(d.id.view(capacity)), &ByValue(d.scratch_u32.view_mut(n))])?;
+            std::mem::swap(&mut d.id, &mut d.scratch_u32);
+        }
+        Ok(())
+    }
+
+    /// Lines 5-8: density (pressure is evaluated from it where it is read).
+    fn density(&mut self) -> Result<(), CudaError> {
+        let n = self.bound;
+        let args = DensityArgs { neighborhood: self.neighborhood(), fluid: self.host.fluid, density: self.device.density.view_mut(n) };
+        let count = self.count();
+        // SAFETY: density_<R>(count, args).
+        unsafe { self.gpu.launch(kernel::<R>("density", ""), n as u32, &[&count, &ByValue(args)]) }
+    }
+
+    /// Fluid inside a nozzle's tube moves with the jet (see `coil_kernels::nozzle`).
+    fn nozzles(&mut self) -> Result<(), CudaError> {
+        let n = self.bound;
+        let count = self.count();
+        let d = &self.device;
+        for inlet in self.host.inlets() {
+            let args = NozzleArgs {
+                fluid: self.host.fluid,
+                tube: inlet.tube(self.host.time),
+                id: d.id.view(n),
+                position: vec3_view(&d.position, n),
+                acceleration: vec3_view_mut(&d.acceleration, n),
+                velocity_half: vec3_view_mut(&d.velocity_half, n),
+            };
+            // SAFETY: nozzle_<R>(count, args).
+            unsafe { self.gpu.launch(kernel::<R>("nozzle", ""), n as u32, &[&count, &ByValue(args)])? };
+        }
+        Ok(())
+    }
+
+    /// Lines 17-19: leap-frog.
+    fn leapfrog(&mut self, dt: f64) -> Result<(), CudaError> {
+        let n = self.bound;
+        let d = &self.device;
+        let args = LeapfrogArgs {
+            fluid: self.host.fluid,
+            dt: R::from_f64(dt),
+            kick_dt: R::from_f64(self.host.kick_dt(dt)),
+            id: d.id.view(n),
+            acceleration: vec3_view(&d.acceleration, n),
+            position: vec3_view_mut(&d.position, n),
+            velocity_half: vec3_view_mut(&d.velocity_half, n),
+            velocity: vec3_view_mut(&d.velocity, n),
+        };
+        let count = self.count();
+        // SAFETY: leapfrog_<R>(count, args).
+        unsafe { self.gpu.launch(kernel::<R>("leapfrog", ""), n as u32, &[&count, &ByValue(args)]) }
+    }
+}
