@@ -4,7 +4,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use coil::check::check;
 use coil::output::vtu_read::read_frame;
 use coil::preview::{frame_path, render_frame, Coloring, View};
-use coil::run::{run, RunError, RunOptions};
+use coil::run::{run, Backend, RunError, RunOptions};
 use coil::scene::{Precision, Scene};
 use coil::scene_override::Override;
 use std::path::{Path, PathBuf};
@@ -21,7 +21,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run a scene on the CPU and write frames (.vtu + .pvd for ParaView).
+    /// Run a scene on the CPU or a CUDA GPU and write frames (.vtu + .pvd for ParaView).
     Run {
         /// Scene file (TOML), e.g. scenes/round_jet.toml.
         scene: PathBuf,
@@ -33,8 +33,9 @@ enum Command {
         /// Output folder [default: out/<scene name>].
         #[arg(long)]
         out: Option<PathBuf>,
-        /// Where the physics runs: cpu, or auto (a CUDA device when this build has the CUDA
-        /// backend and one is present, else the CPU).
+        /// Where the physics runs: cpu; cuda (an NVIDIA GPU; needs a build with
+        /// `--features cuda`); or auto (a CUDA device when this build has the backend and one is
+        /// present, else the CPU).
         #[arg(long, value_enum, default_value = "auto")]
         backend: BackendArg,
         /// Floating-point precision of the physics [default: the scene's].
@@ -102,6 +103,7 @@ enum Command {
 enum BackendArg {
     Auto,
     Cpu,
+    Cuda,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -206,10 +208,12 @@ fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
             };
-            if backend == BackendArg::Auto && !quiet {
-                eprintln!("backend: cpu (this build has no CUDA backend)");
-            }
             let options = RunOptions {
+                backend: match backend {
+                    BackendArg::Auto => Backend::Auto,
+                    BackendArg::Cpu => Backend::Cpu,
+                    BackendArg::Cuda => Backend::Cuda,
+                },
                 out_dir: out.unwrap_or_else(|| PathBuf::from("out").join(&parsed.name)),
                 precision: precision.map(PrecisionArg::precision),
                 quiet,
@@ -225,8 +229,8 @@ fn main() -> ExitCode {
                 Err(e) => {
                     eprintln!("error: {e}");
                     ExitCode::from(match e {
-                        RunError::Scene(_) => 2,
-                        RunError::Io(_) => 1,
+                        RunError::Scene(_) | RunError::Backend(_) => 2,
+                        RunError::Io(_) | RunError::Device(..) => 1,
                         RunError::Unstable(..) => 3,
                     })
                 }

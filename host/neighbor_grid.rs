@@ -78,6 +78,7 @@ impl NeighborGrid {
     }
 
     /// The start of each cell's run, for a backend that sorted elsewhere to fill in.
+    #[cfg(feature = "cuda")]
     pub(crate) fn cell_start_mut(&mut self) -> &mut [u32] {
         &mut self.cell_start
     }

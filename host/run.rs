@@ -1,4 +1,5 @@
-//! `coil run`: a scene on the CPU from t = 0 to its end time, writing frames as it goes.
+//! `coil run`: a scene from t = 0 to its end time, on the CPU or a CUDA device, writing frames
+//! as it goes.
 
 use crate::frame::Frame;
 use crate::model::{with_model, Model, WithModel};
@@ -9,6 +10,7 @@ use crate::run_log::{resolved, RunLog};
 use crate::scene::{FrameFormat, Precision, Scene, SceneError};
 use crate::setup::{initial_particles, InitialParticles};
 use crate::simulation::{Instability, Simulation};
+use crate::time_step::Limit;
 use coil_kernels::Real;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt;
@@ -19,8 +21,55 @@ use std::time::{Duration, Instant};
 /// Pixels per panel of `--preview` pictures.
 const PREVIEW_SIZE: usize = 480;
 
+/// Where the physics runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Backend {
+    Cpu,
+    /// A CUDA device; an error where there is none.
+    Cuda,
+    /// A CUDA device when this build has the backend and a device is present, else the CPU.
+    Auto,
+}
+
+#[cfg(feature = "cuda")]
+type Device = crate::cuda::Gpu;
+/// This build has no CUDA backend: no device can exist.
+#[cfg(not(feature = "cuda"))]
+enum Device {}
+
+/// Opens the device `backend` asks for; `None` runs on the CPU. Says which it chose.
+fn open_device(backend: Backend, quiet: bool) -> Result<Option<Device>, String> {
+    #[cfg(feature = "cuda")]
+    let opened = crate::cuda::Gpu::open().map_err(|e| e.to_string());
+    #[cfg(not(feature = "cuda"))]
+    let opened: Result<Device, String> =
+        Err("this coil was built without the CUDA backend (rebuild with `cargo build --release --features cuda`)".into());
+    let device = match (backend, opened) {
+        (Backend::Cpu, _) => None,
+        (_, Ok(device)) => Some(device),
+        (Backend::Cuda, Err(e)) => return Err(format!("--backend cuda: {e}")),
+        (Backend::Auto, Err(e)) => {
+            if !quiet {
+                eprintln!("backend: cpu ({e})");
+            }
+            return Ok(None);
+        }
+    };
+    if !quiet {
+        match &device {
+            None => eprintln!("backend: cpu"),
+            #[cfg(feature = "cuda")]
+            Some(gpu) => eprintln!("backend: cuda, {}", gpu.describe()),
+            #[cfg(not(feature = "cuda"))]
+            Some(d) => match *d {},
+        }
+    }
+    Ok(device)
+}
+
 #[derive(Debug, Clone)]
 pub struct RunOptions {
+    pub backend: Backend,
     /// Folder for frames; created if missing.
     pub out_dir: PathBuf,
     /// Overrides the scene's precision.
@@ -72,6 +121,10 @@ pub enum RunError {
     Io(String),
     /// The run went unstable; frames written before are kept.
     Unstable(Instability, Summary),
+    /// The backend asked for is not available here (exit code 2).
+    Backend(String),
+    /// The device failed during the run; frames written before are kept.
+    Device(String, Summary),
 }
 
 impl fmt::Display for RunError {
@@ -82,6 +135,8 @@ impl fmt::Display for RunError {
             RunError::Unstable(i, s) => {
                 write!(f, "{i}\nFrames written before it are kept ({}).", s.frames)
             }
+            RunError::Backend(e) => f.write_str(e),
+            RunError::Device(e, s) => write!(f, "{e}\nFrames written before it are kept ({}).", s.frames),
         }
     }
 }
@@ -97,11 +152,12 @@ pub fn run(scene: &Scene, scene_file: &str, options: &RunOptions) -> Result<Summ
         })
     })?;
     let precision = options.precision.unwrap_or(scene.simulation.precision);
+    let device = open_device(options.backend, options.quiet).map_err(RunError::Backend)?;
     let mut log = RunLog {
         coil_version: env!("CARGO_PKG_VERSION"),
         scene_file,
         overrides: &options.overrides,
-        backend: "cpu",
+        backend: if device.is_some() { "cuda" } else { "cpu" },
         precision,
         threads: rayon::current_num_threads(),
         status: "running",
@@ -113,12 +169,13 @@ pub fn run(scene: &Scene, scene_file: &str, options: &RunOptions) -> Result<Summ
     let log_path = options.out_dir.join("run.json");
     log.write(&options.out_dir).map_err(|e| io_error("run log", &log_path, e))?;
     let result = match precision {
-        Precision::F32 => with_model::<f32, _>(scene, Drive { scene, initial: &initial, options }),
-        Precision::F64 => with_model::<f64, _>(scene, Drive { scene, initial: &initial, options }),
+        Precision::F32 => with_model::<f32, _>(scene, Drive { scene, initial: &initial, options, device }),
+        Precision::F64 => with_model::<f64, _>(scene, Drive { scene, initial: &initial, options, device }),
     };
     (log.status, log.diagnosis, log.summary) = match &result {
         Ok(summary) => ("completed", None, Some(summary.clone())),
         Err(RunError::Unstable(i, summary)) => ("unstable", Some(i.to_string()), Some(summary.clone())),
+        Err(RunError::Device(e, summary)) => ("failed", Some(e.clone()), Some(summary.clone())),
         Err(e) => ("failed", Some(e.to_string()), None),
     };
     log.write(&options.out_dir).map_err(|e| io_error("run log", &log_path, e))?;
@@ -130,12 +187,82 @@ struct Drive<'a> {
     scene: &'a Scene,
     initial: &'a InitialParticles,
     options: &'a RunOptions,
+    device: Option<Device>,
 }
 
 impl WithModel for Drive<'_> {
     type Output = Result<Summary, RunError>;
     fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
-        drive(self.scene, self.initial, model, self.options)
+        let sim = Simulation::<R, M>::new(self.scene, self.initial, model);
+        match self.device {
+            None => drive(sim, self.scene, self.initial, self.options),
+            #[cfg(feature = "cuda")]
+            Some(gpu) => {
+                let sim = crate::cuda::GpuSimulation::new(sim, gpu).map_err(|e| RunError::Backend(e.to_string()))?;
+                drive(sim, self.scene, self.initial, self.options)
+            }
+            #[cfg(not(feature = "cuda"))]
+            Some(d) => match d {},
+        }
+    }
+}
+
+/// Why a step stopped the run.
+pub enum StepStop {
+    Unstable(Instability),
+    /// The device failed.
+    Device(String),
+}
+
+/// A run's state as the time loop drives it, on whichever backend holds it.
+pub trait Stepping<R: Real, M: Model<R>> {
+    /// The host's view of the run; its particles are current after `sync`.
+    fn sim(&self) -> &Simulation<R, M>;
+    fn step_with(&mut self, dt: f64, limit: Limit) -> Result<(), StepStop>;
+    /// Brings the host's particles up to date and checks them (before frames, at the end).
+    fn sync(&mut self) -> Result<(), StepStop>;
+    /// Particles the last step moved, boundary included.
+    fn particle_count(&self) -> usize;
+}
+
+impl<R: Real, M: Model<R>> Stepping<R, M> for Simulation<R, M> {
+    fn sim(&self) -> &Simulation<R, M> {
+        self
+    }
+    fn step_with(&mut self, dt: f64, limit: Limit) -> Result<(), StepStop> {
+        Simulation::step_with(self, dt, limit).map_err(StepStop::Unstable)
+    }
+    fn sync(&mut self) -> Result<(), StepStop> {
+        Ok(())
+    }
+    fn particle_count(&self) -> usize {
+        self.particles.len()
+    }
+}
+
+#[cfg(feature = "cuda")]
+impl<R: Real, M: Model<R>> Stepping<R, M> for crate::cuda::GpuSimulation<R, M> {
+    fn sim(&self) -> &Simulation<R, M> {
+        &self.host
+    }
+    fn step_with(&mut self, dt: f64, limit: Limit) -> Result<(), StepStop> {
+        crate::cuda::GpuSimulation::step_with(self, dt, limit).map_err(StepStop::from)
+    }
+    fn sync(&mut self) -> Result<(), StepStop> {
+        self.download().map_err(StepStop::from)
+    }
+    fn particle_count(&self) -> usize {
+        self.particle_bound()
+    }
+}
+
+#[cfg(feature = "cuda")]
+impl From<crate::cuda::GpuStepError> for StepStop {
+    fn from(e: crate::cuda::GpuStepError) -> Self {
+        match e {
+            crate::cuda::GpuStepError::Unstable(i) => StepStop::Unstable(i),
+            crate::cuda::GpuStepError::Cuda(e) => StepStop::Device(e.to_string()),
+        }
     }
 }
 
@@ -192,13 +319,12 @@ fn io_error(what: &str, path: &std::path::Path, e: std::io::Error) -> RunError {
     RunError::Io(format!("cannot write {what} {}: {e}", path.display()))
 }
 
-fn drive<R: Real, M: Model<R>>(
+fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
+    mut state: S,
     scene: &Scene,
     initial: &InitialParticles,
-    model: M,
     options: &RunOptions,
 ) -> Result<Summary, RunError> {
-    let mut sim = Simulation::<R, M>::new(scene, initial, model);
     let dir = &options.out_dir;
 
     let mut bytes = Vec::new();
@@ -243,7 +369,7 @@ fn drive<R: Real, M: Model<R>>(
         *frames += 1;
         Ok(())
     };
-    write_frame(&sim, &mut frames)?;
+    write_frame(state.sim(), &mut frames)?;
 
     let started = Instant::now();
     let mut last_report = started;
@@ -268,15 +394,20 @@ fn drive<R: Real, M: Model<R>>(
             frames,
         }
     };
-    while sim.time < end * (1.0 - 1e-12) {
+    let stopped = |stop: StepStop, s: Summary| match stop {
+        StepStop::Unstable(instability) => RunError::Unstable(instability, s),
+        StepStop::Device(e) => RunError::Device(e, s),
+    };
+    while state.sim().time < end * (1.0 - 1e-12) {
+        let sim = state.sim();
         let (dt, limit) = sim.next_dt();
         let dt = dt.min(end - sim.time);
-        if let Err(instability) = sim.step_with(dt, limit) {
+        if let Err(stop) = state.step_with(dt, limit) {
             progress.finish();
-            let s = summary(&sim, frames, particle_steps, max_density_error, max_speed);
-            return Err(RunError::Unstable(instability, s));
+            return Err(stopped(stop, summary(state.sim(), frames, particle_steps, max_density_error, max_speed)));
         }
-        particle_steps += sim.particles.len() as f64;
+        let sim = state.sim();
+        particle_steps += state.particle_count() as f64;
         max_density_error = max_density_error.max(sim.diagnostics.max_density_error);
         max_speed = max_speed.max(sim.diagnostics.max_speed);
         let due = match every_steps {
@@ -284,16 +415,26 @@ fn drive<R: Real, M: Model<R>>(
             None => sim.time >= next_frame_time * (1.0 - 1e-9),
         };
         if due {
-            write_frame(&sim, &mut frames)?;
+            if let Err(stop) = state.sync() {
+                progress.finish();
+                return Err(stopped(stop, summary(state.sim(), frames, particle_steps, max_density_error, max_speed)));
+            }
+            let sim = state.sim();
+            write_frame(sim, &mut frames)?;
             while next_frame_time <= sim.time * (1.0 + 1e-9) {
                 next_frame_time += every_s.unwrap_or(f64::INFINITY);
             }
         }
         if !options.quiet && last_report.elapsed() >= Duration::from_millis(200) {
             last_report = Instant::now();
-            progress.report(&sim, end, started.elapsed());
+            progress.report(state.sim(), end, started.elapsed());
         }
     }
     progress.finish();
-    Ok(summary(&sim, frames, particle_steps, max_density_error, max_speed))
+    progress.finish();
+    if let Err(stop) = state.sync() {
+        return Err(stopped(stop, summary(state.sim(), frames, particle_steps, max_density_error, max_speed)));
+    }
+    let sim = state.sim();
+    Ok(summary(sim, frames, particle_steps, max_density_error, max_speed))
 }

@@ -338,7 +338,14 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
 
 /// Algorithm 1, line 1: every inlet appends the layers due after `dt` from `time` to `p`,
 /// within `room` particles in all. Returns how many it added.
-pub(crate) fn inject<R: Real>(inlets: &mut [Inlet], time: f64, dt: f64, room: usize, next_id: &mut u32, p: &mut Particles<R>) -> usize {
+pub(crate) fn inject<R: Real>(
+    inlets: &mut [Inlet],
+    time: f64,
+    dt: f64,
+    room: usize,
+    next_id: &mut u32,
+    p: &mut Particles<R>,
+) -> usize {
     let mut added = 0;
     for inlet in inlets {
         added += inlet.inject(time, dt, room - added, next_id, p);

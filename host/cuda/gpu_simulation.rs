@@ -235,6 +235,11 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         self.gpu.describe()
     }
 
+    /// No more particles than this are live on the device (exact after a check).
+    pub fn particle_bound(&self) -> usize {
+        self.bound
+    }
+
     /// Bytes of device memory the run allocated.
     pub fn device_bytes(&self) -> usize {
         self.device.bytes()
@@ -384,7 +389,11 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
                 gpu.launch("append_f64", added as u32, &[&count, &k, &staged_x, &ByValue(d.position[a].view_mut(capacity))])?;
                 let staged_v = ByValue(d.staged_velocity[a].view(added));
                 for target in [&d.velocity[a], &d.velocity_half[a]] {
-                    gpu.launch(kernel::<R>("append", ""), added as u32, &[&count, &k, &staged_v, &ByValue(target.view_mut(capacity))])?;
+                    gpu.launch(
+                        kernel::<R>("append", ""),
+                        added as u32,
+                        &[&count, &k, &staged_v, &ByValue(target.view_mut(capacity))],
+                    )?;
                 }
             }
             let staged_id = ByValue(d.staged_id.view(added));
@@ -433,7 +442,11 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         // SAFETY: gather_<T>(count, order, unsorted, sorted) with `count` now the live count.
         unsafe {
             for a in 0..3 {
-                gpu.launch("gather_f64", threads, &[&count, &order, &ByValue(d.position[a].view(capacity)), &ByValue(d.scratch_f64.view_mut(n))])?;
+                gpu.launch(
+                    "gather_f64",
+                    threads,
+                    &[&count, &order, &ByValue(d.position[a].view(capacity)), &ByValue(d.scratch_f64.view_mut(n))],
+                )?;
                 std::mem::swap(&mut d.position[a], &mut d.scratch_f64);
                 for field in [&mut d.velocity[a], &mut d.velocity_half[a]] {
                     let sorted = ByValue(d.scratch_real.view_mut(n));
@@ -441,7 +454,11 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
                     std::mem::swap(field, &mut d.scratch_real);
                 }
             }
-            gpu.launch("gather_u32", threads, &[&count, &order, &ByValue(d.id.view(capacity)), &ByValue(d.scratch_u32.view_mut(n))])?;
+            gpu.launch(
+                "gather_u32",
+                threads,
+                &[&count, &order, &ByValue(d.id.view(capacity)), &ByValue(d.scratch_u32.view_mut(n))],
+            )?;
             std::mem::swap(&mut d.id, &mut d.scratch_u32);
         }
         Ok(())
@@ -450,7 +467,8 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
     /// Lines 5-8: density (pressure is evaluated from it where it is read).
     fn density(&mut self) -> Result<(), CudaError> {
         let n = self.bound;
-        let args = DensityArgs { neighborhood: self.neighborhood(), fluid: self.host.fluid, density: self.device.density.view_mut(n) };
+        let args =
+            DensityArgs { neighborhood: self.neighborhood(), fluid: self.host.fluid, density: self.device.density.view_mut(n) };
         let count = self.count();
         // SAFETY: density_<R>(count, args).
         unsafe { self.gpu.launch(kernel::<R>("density", ""), n as u32, &[&count, &ByValue(args)]) }

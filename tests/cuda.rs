@@ -1,0 +1,232 @@
+//! The CUDA backend against the CPU backend. Built only with `--features cuda`.
+//!
+//! The PTX argument layouts are checked everywhere (no GPU needed). The rest runs where a CUDA
+//! device is present and otherwise prints "skipped: no CUDA device".
+#![cfg(feature = "cuda")]
+
+mod common;
+
+use coil::cuda::gpu::PTX;
+use coil::cuda::{Gpu, GpuSimulation};
+use coil::model::{LaplacianModel, Model, StressModel};
+use coil::scene::Scene;
+use coil::setup::initial_particles;
+use coil::simulation::Simulation;
+use coil_kernels::acceleration::{AccelerationArgs, StressDivergence, VelocityLaplacian};
+use coil_kernels::cell_grid::HashArgs;
+use coil_kernels::counting_sort::Counters;
+use coil_kernels::cross_viscosity::{Cross, Newtonian};
+use coil_kernels::density::DensityArgs;
+use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
+use coil_kernels::leapfrog::LeapfrogArgs;
+use coil_kernels::nozzle::NozzleArgs;
+use coil_kernels::velocity_gradient::StressArgs;
+use coil_kernels::view::{View, ViewMut};
+use coil_kernels::Real;
+use std::collections::HashMap;
+use std::mem::size_of;
+use std::path::Path;
+
+/// Each PTX entry's parameter sizes in bytes, as ptxas sees them.
+fn ptx_parameters() -> HashMap<String, Vec<usize>> {
+    let mut entries = HashMap::new();
+    let mut current: Option<(String, Vec<usize>)> = None;
+    for line in PTX.lines().map(str::trim) {
+        if let Some(rest) = line.strip_prefix(".visible .entry ") {
+            current = Some((rest.trim_end_matches('(').to_string(), Vec::new()));
+        } else if let (Some((_, params)), Some(decl)) = (current.as_mut(), line.strip_prefix(".param ")) {
+            let size = if let Some(open) = decl.find('[') {
+                decl[open + 1..decl.find(']').expect("closing bracket")].parse().expect("a byte count")
+            } else if decl.starts_with(".u32") || decl.starts_with(".b32") {
+                4
+            } else {
+                8
+            };
+            params.push(size);
+        } else if line.starts_with(')') {
+            if let Some((name, params)) = current.take() {
+                entries.insert(name, params);
+            }
+        }
+    }
+    entries
+}
+
+type Count = View<'static, u32>;
+
+/// The host's argument types of every entry, by size: a field added to a kernel argument struct
+/// on one side only, or a changed signature, shows here without a GPU.
+#[test]
+fn ptx_entry_parameters_match_the_host_argument_layouts() {
+    fn per_precision<R: Real>(expected: &mut Vec<(String, Vec<usize>)>) {
+        let r = R::NAME;
+        let count = size_of::<Count>();
+        let mut add = |name: String, sizes: Vec<usize>| expected.push((name, sizes));
+        add(format!("density_{r}"), vec![count, size_of::<DensityArgs<R>>()]);
+        add(format!("stress_newtonian_{r}"), vec![count, size_of::<StressArgs<R, Newtonian<R>>>()]);
+        add(format!("stress_cross_{r}"), vec![count, size_of::<StressArgs<R, Cross<R>>>()]);
+        add(format!("acceleration_stress_{r}"), vec![count, size_of::<AccelerationArgs<R, StressDivergence<R>>>()]);
+        add(format!("acceleration_laplacian_{r}"), vec![count, size_of::<AccelerationArgs<R, VelocityLaplacian<R>>>()]);
+        add(format!("nozzle_{r}"), vec![count, size_of::<NozzleArgs<R>>()]);
+        add(format!("leapfrog_{r}"), vec![count, size_of::<LeapfrogArgs<R>>()]);
+        add(format!("gather_{r}"), vec![count, size_of::<View<u32>>(), size_of::<View<R>>(), size_of::<ViewMut<R>>()]);
+        add(format!("append_{r}"), vec![count, 4, size_of::<View<R>>(), size_of::<ViewMut<R>>()]);
+        add(format!("diagnostics_{r}"), vec![count, 4, size_of::<DiagnosticsArgs<R>>(), size_of::<ViewMut<StateFigures>>()]);
+    }
+    let view = size_of::<View<u32>>();
+    let mut expected = vec![
+        ("hash".to_string(), vec![view, size_of::<HashArgs>()]),
+        ("count_particles".into(), vec![view, view, size_of::<Counters>()]),
+        ("scan_chunk_totals".into(), vec![4, 4, size_of::<Counters>(), view]),
+        ("scan_offsets".into(), vec![view]),
+        ("scan_chunks".into(), vec![4, 4, view, size_of::<Counters>(), view]),
+        ("scatter_particles".into(), vec![view, view, size_of::<Counters>(), view]),
+        ("sort_buckets".into(), vec![4, view, view]),
+        ("set_count".into(), vec![view, view, 4]),
+        ("grow_count".into(), vec![view, 4]),
+        ("gather_u32".into(), vec![view; 4]),
+        ("append_u32".into(), vec![view, 4, view, view]),
+    ];
+    per_precision::<f32>(&mut expected);
+    per_precision::<f64>(&mut expected);
+    let ptx = ptx_parameters();
+    for (name, sizes) in &expected {
+        let found = ptx.get(name).unwrap_or_else(|| panic!("PTX has no entry {name}; it has {:?}", ptx.keys()));
+        assert_eq!(found, sizes, "{name}: PTX parameter sizes against the host's argument types");
+    }
+    assert_eq!(ptx.len(), expected.len(), "an entry without a layout check: {:?}", ptx.keys());
+}
+
+/// The device, or a visible skip.
+fn device() -> Option<Gpu> {
+    match Gpu::open() {
+        Ok(gpu) => Some(gpu),
+        Err(e) => {
+            println!("skipped: no CUDA device ({e})");
+            None
+        }
+    }
+}
+
+/// The shipped dam break, coarse: 10^3 fluid particles in a closed box.
+fn dam_break() -> Scene {
+    // At run time first: `scripts/gpu run` runs this binary in a checkout elsewhere.
+    let root = std::env::var("CARGO_MANIFEST_DIR").unwrap_or_else(|_| env!("CARGO_MANIFEST_DIR").into());
+    let path = Path::new(&root).join("scenes/dam_break.toml");
+    let text = std::fs::read_to_string(&path).expect("shipped scene");
+    let text = text.replace("particle_spacing_m = 0.02", "particle_spacing_m = 0.04");
+    Scene::parse(&text, "dam_break.toml").expect("valid")
+}
+
+fn cross<R: Real>(scene: &Scene) -> StressModel<Cross<R>> {
+    let v = &scene.material.viscosity;
+    StressModel(Cross {
+        nu0: R::from_f64(v.nu0_m2_s),
+        nu_inf: R::from_f64(v.nu_inf()),
+        k: R::from_f64(v.cross_k_s),
+        n: R::from_f64(v.cross_n),
+    })
+}
+
+/// Fluid positions (m) and velocities (m/s) by particle id.
+fn state_by_id<R: Real, M: Model<R>>(sim: &Simulation<R, M>) -> Vec<(u32, [f64; 3], [f64; 3])> {
+    let p = &sim.particles;
+    let mut out: Vec<_> = (0..p.len())
+        .map(|i| (p.id[i], [0, 1, 2].map(|a| p.position[a][i]), [0, 1, 2].map(|a| p.velocity[a][i].to_f64())))
+        .collect();
+    out.sort_by_key(|s| s.0);
+    out
+}
+
+/// `steps` fixed steps on the CPU and on the GPU from the same start.
+fn both<R: Real, M: Model<R>>(gpu: Gpu, scene: &Scene, model: M, steps: usize) -> (Simulation<R, M>, GpuSimulation<R, M>) {
+    let initial = initial_particles(scene, "dam_break.toml").expect("valid");
+    let mut cpu = Simulation::<R, M>::new(scene, &initial, model);
+    let mut on_gpu = GpuSimulation::new(Simulation::<R, M>::new(scene, &initial, model), gpu).expect("device state");
+    on_gpu.check_every = 1;
+    let dt = 2e-4;
+    for _ in 0..steps {
+        cpu.step_with(dt, coil::time_step::Limit::Acoustic).expect("stable on the CPU");
+        on_gpu.step_with(dt, coil::time_step::Limit::Acoustic).expect("stable on the GPU");
+    }
+    on_gpu.download().expect("download");
+    (cpu, on_gpu)
+}
+
+/// One step: the sort is integer work on identical positions, so the particle order must be
+/// identical; the floats differ only by the device's fused multiply-adds.
+#[test]
+fn one_gpu_step_sorts_exactly_like_the_cpu() {
+    let Some(gpu) = device() else { return };
+    let scene = dam_break();
+    let (cpu, on_gpu) = both::<f64, _>(gpu, &scene, cross::<f64>(&scene), 1);
+    let (c, g) = (&cpu.particles, &on_gpu.host.particles);
+    assert_eq!(c.len(), g.len());
+    assert_eq!(c.id[..c.len()], g.id[..g.len()], "particle order after the sort");
+    for i in 0..c.len() {
+        let (dc, dg) = (c.density[i], g.density[i]);
+        assert!((dc - dg).abs() <= 1e-12 * dc, "density of particle {i}: CPU {dc}, GPU {dg}");
+    }
+}
+
+/// A whole scene for 50 steps. Tolerances: the device contracts a*b+c into one rounding, so
+/// every sum differs in its last bits (1e-16 relative in f64, 6e-8 in f32); over 50 steps of a
+/// slowly moving column that stays many orders below the spacing (0.04 m).
+#[test]
+fn a_scene_on_the_gpu_agrees_with_the_cpu() {
+    fn compare<R: Real>(gpu: Gpu, position_tolerance_m: f64) {
+        let scene = dam_break();
+        let (cpu, on_gpu) = both::<R, _>(gpu, &scene, cross::<R>(&scene), 50);
+        let (c, g) = (state_by_id(&cpu), state_by_id(&on_gpu.host));
+        assert_eq!(c.len(), g.len(), "{}: particle counts", R::NAME);
+        let worst = c
+            .iter()
+            .zip(&g)
+            .map(|(a, b)| {
+                assert_eq!(a.0, b.0);
+                (0..3).map(|k| (a.1[k] - b.1[k]).abs()).fold(0.0, f64::max)
+            })
+            .fold(0.0, f64::max);
+        println!("{}: largest position difference after 50 steps {worst:.3e} m", R::NAME);
+        assert!(worst <= position_tolerance_m, "{}: positions differ by {worst:.3e} m", R::NAME);
+    }
+    let Some(gpu) = device() else { return };
+    compare::<f64>(gpu, 1e-10);
+    let Some(gpu) = device() else { return };
+    compare::<f32>(gpu, 1e-5);
+}
+
+/// Runs are deterministic on the device too: the scatter's atomics only decide the order
+/// within a cell, which the per-cell sort then fixes.
+#[test]
+fn two_gpu_runs_are_bit_identical() {
+    let scene = dam_break();
+    let laplacian = LaplacianModel(Newtonian { nu0: scene.material.viscosity.nu0_m2_s as f32 });
+    let run = || {
+        let gpu = device()?;
+        let (_, on_gpu) = both::<f32, _>(gpu, &scene, laplacian, 30);
+        Some(state_by_id(&on_gpu.host))
+    };
+    let (Some(a), Some(b)) = (run(), run()) else { return };
+    let bits = |s: &[(u32, [f64; 3], [f64; 3])]| {
+        s.iter().map(|p| (p.0, p.1.map(f64::to_bits), p.2.map(f64::to_bits))).collect::<Vec<_>>()
+    };
+    assert!(bits(&a) == bits(&b), "two GPU runs differ");
+}
+
+/// A run that goes unstable on the device stops with the CPU's diagnosis.
+#[test]
+fn an_unstable_gpu_run_is_stopped_by_the_guard() {
+    let Some(gpu) = device() else { return };
+    let scene = dam_break();
+    let initial = initial_particles(&scene, "dam_break.toml").expect("valid");
+    let model = cross::<f32>(&scene);
+    let mut sim = GpuSimulation::new(Simulation::<f32, _>::new(&scene, &initial, model), gpu).expect("device state");
+    sim.check_every = 1;
+    let bound = sim.host.stepper.bound.dt().0;
+    let stopped = (0..2000).find_map(|_| sim.step_with(50.0 * bound, coil::time_step::Limit::Fixed).err());
+    match stopped {
+        Some(coil::cuda::GpuStepError::Unstable(i)) => assert!(i.dt_s > i.stability_bound_s),
+        other => panic!("expected the guard to stop the run, got {other:?}"),
+    }
+}
