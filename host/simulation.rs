@@ -72,13 +72,13 @@ pub struct Simulation<R: Real, M: Model<R>> {
     /// Simulated time (s).
     pub time: f64,
     pub steps: u64,
-    pub(crate) previous_dt: Option<f64>,
+    previous_dt: Option<f64>,
     /// Fluid particles removed for leaving the domain box.
     pub removed: u64,
     /// Fluid particles injected by inlets.
     pub injected: u64,
-    pub(crate) fluid_capacity: usize,
-    pub(crate) fluid_count: usize,
+    fluid_capacity: usize,
+    fluid_count: usize,
     pub(crate) next_id: u32,
     /// Largest fluid speed after the last step (m/s), which the velocity CFL reads.
     pub diagnostics: Diagnostics,

@@ -231,3 +231,25 @@ fn an_output_folder_that_cannot_be_created_exits_2_naming_it() {
     );
     std::fs::remove_file(&file).ok();
 }
+
+/// Asking for a GPU where there is none (no `cuda` feature in this build, or no driver) is a
+/// clear error with exit code 2, never a panic; `auto` falls back to the CPU and says why.
+#[test]
+fn backend_cuda_without_a_device_exits_2_and_auto_falls_back_to_the_cpu() {
+    let out = std::env::temp_dir().join(format!("coil_backend_{}", std::process::id()));
+    let out_arg = out.display().to_string();
+    let common = ["scenes/dam_break.toml", "--out", &out_arg, "--set", "simulation.end_time_s=0.0005"];
+    let cuda = coil(&[&["run", "--backend", "cuda"], &common[..]].concat());
+    let stderr = String::from_utf8_lossy(&cuda.stderr);
+    if cuda.status.success() {
+        println!("skipped: a CUDA device is present");
+        return;
+    }
+    assert_eq!(cuda.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--backend cuda:") && !stderr.contains("panicked"), "{stderr}");
+    let auto = coil(&[&["run", "--backend", "auto"], &common[..]].concat());
+    let stderr = String::from_utf8_lossy(&auto.stderr);
+    assert!(auto.status.success(), "{stderr}");
+    assert!(stderr.contains("backend: cpu ("), "auto must say it chose the CPU and why: {stderr}");
+    std::fs::remove_dir_all(&out).ok();
+}
