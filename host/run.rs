@@ -431,7 +431,6 @@ fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
         }
     }
     progress.finish();
-    progress.finish();
     if let Err(stop) = state.sync() {
         return Err(stopped(stop, summary(state.sim(), frames, particle_steps, max_density_error, max_speed)));
     }
