@@ -2,7 +2,7 @@
 //! 64K fluid particles, f32 and f64, with the paper's operator (Cross, K = 1) and with the
 //! Newtonian Laplacian operator, h = 2 x spacing.
 
-use coil::model::{LaplacianModel, Model, StressModel};
+use coil::model::{cross_law, LaplacianModel, Model, StressModel};
 use coil::scene::Scene;
 use coil::setup::initial_particles;
 use coil::simulation::Simulation;
@@ -47,13 +47,7 @@ fn bench_variant<R: Real, M: Model<R>>(c: &mut Criterion, label: &str, model: im
 }
 
 fn cross<R: Real>(scene: &Scene) -> StressModel<Cross<R>> {
-    let v = &scene.material.viscosity;
-    StressModel(Cross {
-        nu0: R::from_f64(v.nu0_m2_s),
-        nu_inf: R::from_f64(v.nu_inf()),
-        k: R::from_f64(v.cross_k_s),
-        n: R::from_f64(v.cross_n),
-    })
+    StressModel(cross_law(&scene.material.viscosity))
 }
 
 fn laplacian<R: Real>(scene: &Scene) -> LaplacianModel<R> {

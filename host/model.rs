@@ -3,7 +3,7 @@
 //! GPU kernels of a run contain only the physics it uses.
 
 use crate::parallel::launch;
-use crate::scene::{Scene, ViscosityOperator};
+use crate::scene::{Scene, Viscosity, ViscosityOperator};
 use coil_kernels::acceleration::{acceleration_pass, AccelerationArgs, StressDivergence, VelocityLaplacian, ViscousOperator};
 use coil_kernels::cell_grid::Neighborhood;
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
@@ -71,10 +71,17 @@ pub fn with_model<R: Real, W: WithModel>(scene: &Scene, work: W) -> W::Output {
     match (v.operator, v.is_newtonian()) {
         (ViscosityOperator::Laplacian, _) => work.with::<R, _>(LaplacianModel(Newtonian { nu0 })),
         (ViscosityOperator::Stress, true) => work.with::<R, _>(StressModel(Newtonian { nu0 })),
-        (ViscosityOperator::Stress, false) => {
-            let cross = Cross { nu0, nu_inf: R::from_f64(v.nu_inf()), k: R::from_f64(v.cross_k_s), n: R::from_f64(v.cross_n) };
-            work.with::<R, _>(StressModel(cross))
-        }
+        (ViscosityOperator::Stress, false) => work.with::<R, _>(StressModel(cross_law(v))),
+    }
+}
+
+/// The scene's Cross model, Eq. (3), in precision `R` (whatever its K: K = 0 is Newtonian).
+pub fn cross_law<R: Real>(v: &Viscosity) -> Cross<R> {
+    Cross {
+        nu0: R::from_f64(v.nu0_m2_s),
+        nu_inf: R::from_f64(v.nu_inf()),
+        k: R::from_f64(v.cross_k_s),
+        n: R::from_f64(v.cross_n),
     }
 }
 

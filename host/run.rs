@@ -199,6 +199,11 @@ impl WithModel for Drive<'_> {
             #[cfg(feature = "cuda")]
             Some(gpu) => {
                 let sim = crate::cuda::GpuSimulation::new(sim, gpu).map_err(|e| RunError::Backend(e.to_string()))?;
+                if !self.options.quiet {
+                    let bytes = sim.device_bytes();
+                    let per_particle = bytes / sim.host.particles.capacity().max(1);
+                    eprintln!("device memory: {:.1} MiB ({per_particle} B per particle)", bytes as f64 / (1 << 20) as f64);
+                }
                 drive(sim, self.scene, self.initial, self.options)
             }
             #[cfg(not(feature = "cuda"))]

@@ -8,7 +8,7 @@ mod common;
 
 use coil::cuda::gpu::PTX;
 use coil::cuda::{Gpu, GpuSimulation};
-use coil::model::{LaplacianModel, Model, StressModel};
+use coil::model::{cross_law, LaplacianModel, Model, StressModel};
 use coil::scene::Scene;
 use coil::setup::initial_particles;
 use coil::simulation::Simulation;
@@ -119,13 +119,7 @@ fn dam_break() -> Scene {
 }
 
 fn cross<R: Real>(scene: &Scene) -> StressModel<Cross<R>> {
-    let v = &scene.material.viscosity;
-    StressModel(Cross {
-        nu0: R::from_f64(v.nu0_m2_s),
-        nu_inf: R::from_f64(v.nu_inf()),
-        k: R::from_f64(v.cross_k_s),
-        n: R::from_f64(v.cross_n),
-    })
+    StressModel(cross_law(&scene.material.viscosity))
 }
 
 /// Fluid positions (m) and velocities (m/s) by particle id.

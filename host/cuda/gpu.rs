@@ -191,13 +191,6 @@ impl Gpu {
         Ok(())
     }
 
-    /// Time between two points of the stream (ms), from CUDA events.
-    pub fn event(&self) -> Result<cudarc::driver::CudaEvent, CudaError> {
-        self.stream
-            .record_event(Some(sys::CUevent_flags::CU_EVENT_DEFAULT))
-            .map_err(|error| CudaError::Driver { call: "cuEventRecord", error })
-    }
-
     /// A failure found at a synchronising call: the queued kernels ran before it.
     fn failed(&self, call: &'static str, error: DriverError) -> CudaError {
         match error.0 {

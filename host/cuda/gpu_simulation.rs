@@ -230,11 +230,6 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         Ok(sim)
     }
 
-    /// The device and its name, for logs.
-    pub fn device_name(&self) -> String {
-        self.gpu.describe()
-    }
-
     /// No more particles than this are live on the device (exact after a check).
     pub fn particle_bound(&self) -> usize {
         self.bound
@@ -280,11 +275,6 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         let cells = self.host.grid.cell_start_mut();
         d.cell_start.download(gpu, cells)?;
         Ok(())
-    }
-
-    /// dt for the next step and what limits it (from the speed of the last check).
-    pub fn next_dt(&self) -> (f64, Limit) {
-        self.host.next_dt()
     }
 
     /// One step of Algorithm 1 on the device with a given dt (s).
