@@ -1,14 +1,18 @@
 pub use coil_kernels as kernels;
+pub mod bench;
+pub mod bench_report;
 pub mod check;
 #[cfg(feature = "cuda")]
 pub mod cuda;
 pub mod frame;
+pub mod image;
 pub mod inlet;
 pub mod model;
 pub mod neighbor_grid;
 pub mod output;
 pub mod parallel;
 pub mod particles;
+pub mod plot;
 pub mod preview;
 pub mod run;
 pub mod run_log;

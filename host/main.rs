@@ -1,8 +1,11 @@
 //! The `coil` command line.
 
 use clap::{Parser, Subcommand, ValueEnum};
+use coil::bench::{bench, cuda_available, precision_name, table_row, BenchBackend, BenchOptions};
+use coil::bench_report::{chart, csv, kernels_csv, markdown};
 use coil::check::check;
 use coil::output::vtu_read::read_frame;
+use coil::output::write_atomically;
 use coil::preview::{frame_path, render_frame, Coloring, View};
 use coil::run::{run, Backend, RunError, RunOptions};
 use coil::scene::{Precision, Scene};
@@ -91,6 +94,38 @@ enum Command {
         #[arg(long, default_value_t = 2.0)]
         calibrate_s: f64,
     },
+    /// Reproduce the paper's Table I: the dam break at 1K to 1M fluid particles, median ms per
+    /// step on the CPU and a CUDA GPU in f32 and f64, beside the paper's figures. Writes
+    /// bench.md, bench.csv, kernels.csv (GPU kernel times from CUDA events) and bench.png.
+    Bench {
+        /// Table I sizes to run, comma-separated: 1K,4K,16K,64K,128K,256K,1M.
+        #[arg(long, value_delimiter = ',', default_value = "1K,4K,16K,64K,128K,256K,1M")]
+        sizes: Vec<String>,
+        /// Precisions, comma-separated.
+        #[arg(long, value_enum, value_delimiter = ',', default_value = "f32,f64")]
+        precision: Vec<PrecisionArg>,
+        /// cpu, cuda, both, or auto (both when a CUDA device is present, else the CPU).
+        #[arg(long, value_enum, default_value = "auto")]
+        backend: BenchBackendArg,
+        /// Timed steps per measurement.
+        #[arg(long, default_value_t = 100)]
+        steps: usize,
+        /// Timed CPU steps at sizes above 64K (labelled in the report).
+        #[arg(long, default_value_t = 20)]
+        cpu_large_steps: usize,
+        /// Untimed steps before timing.
+        #[arg(long, default_value_t = 20)]
+        warmup: usize,
+        /// GPU steps timed kernel by kernel with CUDA events, after the timed steps.
+        #[arg(long, default_value_t = 20)]
+        profile_steps: usize,
+        /// Worker threads of the CPU backend [default: all cores].
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Output folder.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+    },
     /// List the shipped scenes, one line each, with what each reproduces.
     Scenes {
         /// Folder of scene files.
@@ -106,6 +141,14 @@ enum BackendArg {
     Cuda,
 }
 
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum BenchBackendArg {
+    Auto,
+    Cpu,
+    Cuda,
+    Both,
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 enum ViewArg {
     Side,
@@ -119,7 +162,7 @@ enum ColorArg {
     Speed,
 }
 
-#[derive(Clone, Copy, ValueEnum)]
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum PrecisionArg {
     F32,
     F64,
@@ -153,6 +196,49 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Scenes { dir } => list_scenes(&dir),
+        Command::Bench { sizes, precision, backend, steps, cpu_large_steps, warmup, profile_steps, threads, out } => {
+            let options = set_threads(threads).and_then(|()| {
+                let sizes = sizes
+                    .iter()
+                    .map(|s| {
+                        table_row(s)
+                            .ok_or_else(|| format!("--sizes: `{s}` is not a size of Table I (1K,4K,16K,64K,128K,256K,1M)"))
+                    })
+                    .collect::<Result<Vec<_>, _>>()?;
+                if steps == 0 || cpu_large_steps == 0 {
+                    return Err("--steps and --cpu-large-steps: must be at least 1".to_string());
+                }
+                let backends = match backend {
+                    BenchBackendArg::Cpu => vec![BenchBackend::Cpu],
+                    BenchBackendArg::Cuda => vec![BenchBackend::Cuda],
+                    BenchBackendArg::Both => vec![BenchBackend::Cpu, BenchBackend::Cuda],
+                    BenchBackendArg::Auto => match cuda_available() {
+                        Ok(()) => vec![BenchBackend::Cpu, BenchBackend::Cuda],
+                        Err(why) => {
+                            eprintln!("backend: cpu only ({why})");
+                            vec![BenchBackend::Cpu]
+                        }
+                    },
+                };
+                Ok(BenchOptions {
+                    sizes,
+                    precisions: precision.iter().map(|p| p.precision()).collect(),
+                    backends,
+                    steps,
+                    cpu_large_steps,
+                    warmup,
+                    profile_steps,
+                    quiet: false,
+                })
+            });
+            match options.and_then(|o| bench_command(&o, &out)) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
+                }
+            }
+        }
         Command::Check { scene, set, precision, threads, calibrate_s } => {
             let file = scene.display().to_string();
             let report = set_threads(threads).and_then(|()| load_scene(&scene, &set)).and_then(|parsed| {
@@ -237,6 +323,35 @@ fn main() -> ExitCode {
             }
         }
     }
+}
+
+/// `coil bench`: measures, prints the Markdown table and writes the report files.
+fn bench_command(options: &BenchOptions, out: &Path) -> Result<(), String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("--out: {} cannot be created: {e}", out.display()))?;
+    let report = bench(options, |m| {
+        eprintln!(
+            "{:>4} {} {:<4}: {} fluid + {} boundary particles, median {:.3} ms per step over {} steps",
+            m.size.label,
+            precision_name(m.precision),
+            m.backend.name(),
+            m.fluid,
+            m.boundary,
+            m.median_ms,
+            m.steps
+        )
+    })?;
+    let text = markdown(&report, options);
+    let write = |name: &str, bytes: &[u8]| {
+        let path = out.join(name);
+        write_atomically(&path, bytes).map_err(|e| format!("{}: cannot be written: {e}", path.display()))
+    };
+    write("bench.md", text.as_bytes())?;
+    write("bench.csv", csv(&report).as_bytes())?;
+    write("kernels.csv", kernels_csv(&report).as_bytes())?;
+    write("bench.png", &chart(&report).render(900, 640).to_png())?;
+    println!("{text}");
+    println!("report in {}", out.display());
+    Ok(())
 }
 
 /// `coil scenes`: every scene file in `dir` with its name and description.

@@ -1,8 +1,12 @@
 //! `coil preview`: particles rendered orthographically to a PNG, coloured like the paper's
 //! figures (viscosity from nu_inf to nu0) or by speed, with a colour bar.
 
-use crate::output::write_atomically;
+use crate::image::text;
+pub use crate::image::Image;
 use std::path::Path;
+
+/// Pixels right of the panels for the colour bar and its numbers.
+const BAR_WIDTH: usize = 110;
 
 /// Which way the camera looks.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -15,62 +19,6 @@ pub enum View {
     Both,
 }
 
-/// An RGB picture.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Image {
-    pub width: usize,
-    pub height: usize,
-    /// Row-major RGB, 3 bytes a pixel.
-    pub pixels: Vec<u8>,
-}
-
-const BACKGROUND: [u8; 3] = [255, 255, 255];
-const INK: [u8; 3] = [40, 40, 40];
-const BAR_WIDTH: usize = 110;
-
-impl Image {
-    fn new(width: usize, height: usize) -> Self {
-        Self { width, height, pixels: BACKGROUND.repeat(width * height) }
-    }
-
-    fn put(&mut self, x: i64, y: i64, c: [u8; 3]) {
-        if x >= 0 && y >= 0 && (x as usize) < self.width && (y as usize) < self.height {
-            let k = 3 * (y as usize * self.width + x as usize);
-            self.pixels[k..k + 3].copy_from_slice(&c);
-        }
-    }
-
-    fn disc(&mut self, cx: f64, cy: f64, r: f64, c: [u8; 3]) {
-        let ri = r.ceil() as i64;
-        let (x0, y0) = (cx.round() as i64, cy.round() as i64);
-        for dy in -ri..=ri {
-            for dx in -ri..=ri {
-                let (fx, fy) = ((x0 + dx) as f64 - cx, (y0 + dy) as f64 - cy);
-                if fx * fx + fy * fy <= r * r {
-                    self.put(x0 + dx, y0 + dy, c);
-                }
-            }
-        }
-    }
-
-    /// The picture as PNG bytes.
-    pub fn to_png(&self) -> Vec<u8> {
-        let mut out = Vec::new();
-        let mut encoder = png::Encoder::new(&mut out, self.width as u32, self.height as u32);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        let mut writer = encoder.write_header().expect("writing to memory");
-        writer.write_image_data(&self.pixels).expect("writing to memory");
-        drop(writer);
-        out
-    }
-
-    /// Writes the PNG through a temporary name and a rename.
-    pub fn save(&self, path: &Path) -> std::io::Result<()> {
-        write_atomically(path, &self.to_png())
-    }
-}
-
 /// Viridis, sampled at five points: dark purple (low) to yellow (high), as in the paper's
 /// viscosity figures.
 fn colormap(t: f64) -> [u8; 3] {
@@ -81,45 +29,6 @@ fn colormap(t: f64) -> [u8; 3] {
     let k = (x.floor() as usize).min(3);
     let f = x - k as f64;
     [0, 1, 2].map(|c| (STOPS[k][c] + f * (STOPS[k + 1][c] - STOPS[k][c])).round() as u8)
-}
-
-/// 3 x 5 pixel glyphs for the colour bar's numbers, one row per 3 bits.
-fn glyph(c: char) -> [u8; 5] {
-    match c {
-        '0' => [7, 5, 5, 5, 7],
-        '1' => [2, 6, 2, 2, 7],
-        '2' => [7, 1, 7, 4, 7],
-        '3' => [7, 1, 7, 1, 7],
-        '4' => [5, 5, 7, 1, 1],
-        '5' => [7, 4, 7, 1, 7],
-        '6' => [7, 4, 7, 5, 7],
-        '7' => [7, 1, 1, 1, 1],
-        '8' => [7, 5, 7, 5, 7],
-        '9' => [7, 5, 7, 1, 7],
-        '.' => [0, 0, 0, 0, 2],
-        '-' => [0, 0, 7, 0, 0],
-        '+' => [0, 2, 7, 2, 0],
-        'e' => [0, 7, 7, 4, 7],
-        _ => [0; 5],
-    }
-}
-
-fn text(img: &mut Image, x: i64, y: i64, s: &str, scale: i64) {
-    for (k, ch) in s.chars().enumerate() {
-        let g = glyph(ch);
-        let left = x + k as i64 * 4 * scale;
-        for (row, bits) in g.iter().enumerate() {
-            for col in 0..3 {
-                if bits & (4 >> col) != 0 {
-                    for sy in 0..scale {
-                        for sx in 0..scale {
-                            img.put(left + col * scale + sx, y + row as i64 * scale + sy, INK);
-                        }
-                    }
-                }
-            }
-        }
-    }
 }
 
 /// Renders particles at `position` (m) coloured by `value` mapped from `range.0` (dark) to

@@ -2,8 +2,8 @@
 //! build.rs from `kernels/`), launches by kernel name, and allocations with clear errors.
 
 use cudarc::driver::{
-    sys, CudaContext, CudaFunction, CudaModule, CudaSlice, CudaStream, DevicePtr, DeviceRepr, DriverError, LaunchConfig,
-    PushKernelArg, ValidAsZeroBits,
+    sys, CudaContext, CudaEvent, CudaFunction, CudaModule, CudaSlice, CudaStream, DevicePtr, DeviceRepr, DriverError,
+    LaunchConfig, PushKernelArg, ValidAsZeroBits,
 };
 use cudarc::nvrtc::Ptx;
 use std::collections::HashMap;
@@ -77,6 +77,17 @@ pub struct Gpu {
     /// Synchronise after every launch, so a failure names its kernel (COIL_CUDA_SYNC=1).
     sync_each_launch: bool,
     last_kernel: &'static str,
+    /// While profiling: each launch's kernel and the events recorded around it.
+    profile: Option<Vec<(&'static str, CudaEvent, CudaEvent)>>,
+}
+
+/// GPU time of one kernel over a profiled stretch.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KernelTime {
+    pub kernel: &'static str,
+    pub launches: usize,
+    /// Summed over its launches (ms).
+    pub total_ms: f64,
 }
 
 impl Gpu {
@@ -101,7 +112,7 @@ impl Gpu {
         let stream = ctx.default_stream();
         let module = ctx.load_module(Ptx::from_src(PTX)).map_err(CudaError::PtxLoad)?;
         let sync_each_launch = std::env::var("COIL_CUDA_SYNC").is_ok_and(|v| v == "1");
-        Ok(Self { ctx, stream, module, functions: HashMap::new(), sync_each_launch, last_kernel: "(none)" })
+        Ok(Self { ctx, stream, module, functions: HashMap::new(), sync_each_launch, last_kernel: "(none)", profile: None })
     }
 
     /// The device's name and compute capability, for logs.
@@ -158,6 +169,58 @@ impl Gpu {
         self.stream.synchronize().map_err(|error| self.failed("cuStreamSynchronize", error))
     }
 
+    /// A timing event recorded now on the stream.
+    pub fn mark(&self) -> Result<CudaEvent, CudaError> {
+        self.stream
+            .record_event(Some(sys::CUevent_flags::CU_EVENT_DEFAULT))
+            .map_err(|error| CudaError::Driver { call: "cuEventRecord", error })
+    }
+
+    /// Milliseconds of GPU time between two events from `mark` (waits for `end`).
+    pub fn elapsed_ms(&self, start: &CudaEvent, end: &CudaEvent) -> Result<f64, CudaError> {
+        start.elapsed_ms(end).map(f64::from).map_err(|error| self.failed("cuEventElapsedTime", error))
+    }
+
+    /// Device-to-device copy bandwidth (bytes/s, read plus write): the median of 5 copies of
+    /// 256 MiB, or of a quarter of free memory where that is less.
+    pub fn copy_bandwidth(&self) -> Result<f64, CudaError> {
+        let bytes = (256usize << 20).min(self.memory().0 / 4).max(1 << 20);
+        let source = self.zeros::<u8>(bytes, "bandwidth probe")?;
+        let mut target = self.zeros::<u8>(bytes, "bandwidth probe")?;
+        let mut rates = Vec::new();
+        for _ in 0..5 {
+            let start = self.mark()?;
+            self.stream.memcpy_dtod(&source, &mut target).map_err(|error| self.failed("cuMemcpyDtoD", error))?;
+            let end = self.mark()?;
+            rates.push(2.0 * bytes as f64 / (self.elapsed_ms(&start, &end)? * 1e-3));
+        }
+        rates.sort_by(f64::total_cmp);
+        Ok(rates[2])
+    }
+
+    /// Starts timing every launch with CUDA events.
+    pub fn start_profile(&mut self) {
+        self.profile = Some(Vec::new());
+    }
+
+    /// Stops timing launches and returns each kernel's GPU time since `start_profile`, in the
+    /// order of first launch.
+    pub fn finish_profile(&mut self) -> Result<Vec<KernelTime>, CudaError> {
+        let launches = self.profile.take().unwrap_or_default();
+        let mut times: Vec<KernelTime> = Vec::new();
+        for (kernel, start, end) in &launches {
+            let ms = self.elapsed_ms(start, end)?;
+            match times.iter_mut().find(|t| t.kernel == *kernel) {
+                Some(t) => {
+                    t.launches += 1;
+                    t.total_ms += ms;
+                }
+                None => times.push(KernelTime { kernel, launches: 1, total_ms: ms }),
+            }
+        }
+        Ok(times)
+    }
+
     /// The device address of `slice`, for the views inside kernel arguments.
     pub fn address<T>(&self, slice: &CudaSlice<T>) -> u64 {
         let (ptr, _sync) = slice.device_ptr(&self.stream);
@@ -184,7 +247,12 @@ impl Gpu {
         }
         let cfg = LaunchConfig { grid_dim: (threads.div_ceil(BLOCK), 1, 1), block_dim: (BLOCK, 1, 1), shared_mem_bytes: 0 };
         self.last_kernel = name;
+        let start = if self.profile.is_some() { Some(self.mark()?) } else { None };
         builder.launch(cfg).map_err(|error| CudaError::Launch { kernel: name.into(), error })?;
+        if let Some(start) = start {
+            let end = self.mark()?;
+            self.profile.get_or_insert_with(Vec::new).push((name, start, end));
+        }
         if self.sync_each_launch {
             self.stream.synchronize().map_err(|error| CudaError::Launch { kernel: name.into(), error })?;
         }

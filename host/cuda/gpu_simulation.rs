@@ -235,6 +235,16 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         self.bound
     }
 
+    /// The device, for timing (`Gpu::mark`, `Gpu::start_profile`).
+    pub fn gpu(&mut self) -> &mut Gpu {
+        &mut self.gpu
+    }
+
+    /// Ends the run and hands its device back, its memory freed.
+    pub fn into_gpu(self) -> Gpu {
+        self.gpu
+    }
+
     /// Bytes of device memory the run allocated.
     pub fn device_bytes(&self) -> usize {
         self.device.bytes()

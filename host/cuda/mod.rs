@@ -5,5 +5,5 @@ pub mod device_array;
 pub mod gpu;
 pub mod gpu_simulation;
 
-pub use gpu::{CudaError, Gpu};
+pub use gpu::{CudaError, Gpu, KernelTime};
 pub use gpu_simulation::{GpuSimulation, GpuStepError};

@@ -1,0 +1,397 @@
+//! `coil bench`: the paper's Table I, the dam break at 1K to 1M fluid particles, timed step by
+//! step on the CPU and on a CUDA GPU in f32 and f64, next to the paper's own figures.
+//!
+//! A figure is the median of per-step times after a warm-up. CPU steps are wall-clock times;
+//! GPU steps are the intervals between CUDA events recorded on the stream between steps, with
+//! nothing waiting in between, so they are what a long run achieves per step.
+
+use crate::model::{with_model, Model, WithModel};
+use crate::run::{StepStop, Stepping};
+use crate::scene::{Precision, Scene};
+use crate::scene_override::{apply, Override};
+use crate::setup::{initial_particles, InitialParticles};
+use crate::simulation::Simulation;
+use coil_kernels::Real;
+use std::time::Instant;
+
+/// The dam break of Table I as shipped (K = 1 s, n = 1, nu0 = 0.05, nu_inf = 0.005 m^2/s,
+/// h = 2 x spacing), embedded so the benchmark is the same wherever it runs.
+const DAM_BREAK: &str = include_str!("../scenes/dam_break.toml");
+const DAM_BREAK_FILE: &str = "scenes/dam_break.toml (embedded)";
+/// Edge of the dam break's fluid cube (m).
+const CUBE_EDGE_M: f64 = 0.4;
+
+/// One row of Table I.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TableRow {
+    pub label: &'static str,
+    /// The fluid cube has this many particles along each edge.
+    pub per_edge: usize,
+    /// The paper's CPU time (sequential), ms per step: its seconds per 1000 steps.
+    pub paper_cpu_ms: Option<f64>,
+    /// The paper's GPU time (GeForce GTX 650, 384 CUDA cores), ms per step.
+    pub paper_gpu_ms: f64,
+}
+
+/// Table I of the paper, sizes as cubes of fluid particles.
+pub const TABLE_I: [TableRow; 7] = [
+    TableRow { label: "1K", per_edge: 10, paper_cpu_ms: Some(7.20), paper_gpu_ms: 1.03 },
+    TableRow { label: "4K", per_edge: 16, paper_cpu_ms: Some(35.66), paper_gpu_ms: 2.40 },
+    TableRow { label: "16K", per_edge: 25, paper_cpu_ms: Some(156.42), paper_gpu_ms: 6.81 },
+    TableRow { label: "64K", per_edge: 40, paper_cpu_ms: Some(682.00), paper_gpu_ms: 25.80 },
+    TableRow { label: "128K", per_edge: 50, paper_cpu_ms: Some(1374.86), paper_gpu_ms: 51.35 },
+    TableRow { label: "256K", per_edge: 64, paper_cpu_ms: Some(2887.20), paper_gpu_ms: 104.84 },
+    TableRow { label: "1M", per_edge: 100, paper_cpu_ms: None, paper_gpu_ms: 444.93 },
+];
+
+/// The Table I row a label names (`1K`, `4k`, ...).
+pub fn table_row(label: &str) -> Option<TableRow> {
+    TABLE_I.iter().copied().find(|r| r.label.eq_ignore_ascii_case(label.trim()))
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BenchBackend {
+    Cpu,
+    Cuda,
+}
+
+impl BenchBackend {
+    pub fn name(self) -> &'static str {
+        match self {
+            BenchBackend::Cpu => "cpu",
+            BenchBackend::Cuda => "cuda",
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct BenchOptions {
+    pub sizes: Vec<TableRow>,
+    pub precisions: Vec<Precision>,
+    pub backends: Vec<BenchBackend>,
+    /// Timed steps per measurement.
+    pub steps: usize,
+    /// Timed CPU steps above 64K particles, where 100 steps would take minutes.
+    pub cpu_large_steps: usize,
+    /// Untimed steps first, so the column has started to fall.
+    pub warmup: usize,
+    /// Extra GPU steps with every launch timed by CUDA events.
+    pub profile_steps: usize,
+    pub quiet: bool,
+}
+
+/// One kernel's share of a GPU step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KernelShare {
+    pub kernel: String,
+    pub launches_per_step: f64,
+    pub ms_per_step: f64,
+}
+
+/// One timed configuration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measurement {
+    pub size: TableRow,
+    pub fluid: usize,
+    pub boundary: usize,
+    pub precision: Precision,
+    pub backend: BenchBackend,
+    pub steps: usize,
+    pub median_ms: f64,
+    /// 10th and 90th percentiles of the step times (ms).
+    pub p10_ms: f64,
+    pub p90_ms: f64,
+    /// Memory the run allocated (device memory on the GPU, host memory on the CPU) over fluid
+    /// particles (bytes).
+    pub bytes_per_fluid_particle: f64,
+    /// On the GPU: each kernel's time per step, from CUDA events.
+    pub kernels: Vec<KernelShare>,
+    /// On the GPU: the step's compulsory memory traffic over the measured copy bandwidth (ms).
+    pub memory_floor_ms: Option<f64>,
+    /// On the GPU: device-to-device copy bandwidth (bytes/s), read and write counted.
+    pub copy_bandwidth: Option<f64>,
+}
+
+impl Measurement {
+    /// Fluid particle-steps per second at the median step.
+    pub fn particle_steps_per_s(&self) -> f64 {
+        self.fluid as f64 / (self.median_ms * 1e-3)
+    }
+}
+
+/// What `coil bench` measured, and on what.
+#[derive(Debug, Clone)]
+pub struct BenchReport {
+    pub cpu: String,
+    pub gpu: Option<String>,
+    /// Device-to-device copy bandwidth (bytes/s), read + write counted.
+    pub gpu_bandwidth: Option<f64>,
+    pub measurements: Vec<Measurement>,
+}
+
+/// The dam break with `per_edge`^3 fluid particles.
+pub fn dam_break(per_edge: usize) -> Scene {
+    let spacing = CUBE_EDGE_M / per_edge as f64;
+    let set = Override::parse(&format!("material.particle_spacing_m={spacing}")).expect("a valid override");
+    let text = apply(DAM_BREAK, DAM_BREAK_FILE, &[set]).expect("the shipped scene is valid TOML");
+    Scene::parse(&text, DAM_BREAK_FILE).expect("the shipped dam break is valid at every Table I size")
+}
+
+/// The median and the 10th and 90th percentiles of `times`.
+fn percentiles(mut times: Vec<f64>) -> (f64, f64, f64) {
+    times.sort_by(f64::total_cmp);
+    let at = |q: f64| times[((times.len() - 1) as f64 * q).round() as usize];
+    (at(0.5), at(0.1), at(0.9))
+}
+
+fn step<R: Real, M: Model<R>, S: Stepping<R, M>>(state: &mut S) -> Result<(), String> {
+    let (dt, limit) = state.sim().next_dt();
+    state.step_with(dt, limit).map_err(|stop| match stop {
+        StepStop::Unstable(i) => format!("the dam break went unstable: {i}"),
+        StepStop::Device(e) => e,
+    })
+}
+
+/// Times one configuration; `gpu` is taken for a CUDA measurement and handed back.
+struct Measure<'a> {
+    scene: &'a Scene,
+    initial: &'a InitialParticles,
+    size: TableRow,
+    precision: Precision,
+    steps: usize,
+    options: &'a BenchOptions,
+    gpu: Option<Device>,
+}
+
+#[cfg(feature = "cuda")]
+type Device = crate::cuda::Gpu;
+/// This build has no CUDA backend: no device can exist.
+#[cfg(not(feature = "cuda"))]
+enum Device {}
+
+impl WithModel for Measure<'_> {
+    type Output = (Result<Measurement, String>, Option<Device>);
+    fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
+        let mut sim = Simulation::<R, M>::new(self.scene, self.initial, model);
+        let blank = Measurement {
+            size: self.size,
+            fluid: sim.fluid_count(),
+            boundary: sim.boundary_count(),
+            precision: self.precision,
+            backend: BenchBackend::Cpu,
+            steps: self.steps,
+            median_ms: 0.0,
+            p10_ms: 0.0,
+            p90_ms: 0.0,
+            bytes_per_fluid_particle: sim.memory_bytes() as f64 / sim.fluid_count() as f64,
+            kernels: Vec::new(),
+            memory_floor_ms: None,
+            copy_bandwidth: None,
+        };
+        match self.gpu {
+            None => {
+                let timed = (|| {
+                    for _ in 0..self.options.warmup {
+                        step(&mut sim)?;
+                    }
+                    let mut times = Vec::with_capacity(self.steps);
+                    for _ in 0..self.steps {
+                        let started = Instant::now();
+                        step(&mut sim)?;
+                        times.push(started.elapsed().as_secs_f64() * 1e3);
+                    }
+                    Ok(times)
+                })();
+                let result = timed.map(|times| {
+                    let (median_ms, p10_ms, p90_ms) = percentiles(times);
+                    Measurement { median_ms, p10_ms, p90_ms, ..blank }
+                });
+                (result, None)
+            }
+            #[cfg(feature = "cuda")]
+            Some(gpu) => gpu_measurement(sim, gpu, blank, self.options),
+            #[cfg(not(feature = "cuda"))]
+            Some(d) => match d {},
+        }
+    }
+}
+
+#[cfg(feature = "cuda")]
+fn gpu_measurement<R: Real, M: Model<R>>(
+    sim: Simulation<R, M>,
+    gpu: crate::cuda::Gpu,
+    blank: Measurement,
+    options: &BenchOptions,
+) -> (Result<Measurement, String>, Option<Device>) {
+    use crate::cuda::GpuSimulation;
+    let particles = sim.particles.len();
+    let cells = sim.grid.grid.cell_count() as f64;
+    let mut state = match GpuSimulation::new(sim, gpu) {
+        Ok(s) => s,
+        Err(e) => return (Err(e.to_string()), None),
+    };
+    let bytes = state.device_bytes() as f64;
+    let timed = (|| -> Result<Measurement, String> {
+        for _ in 0..options.warmup {
+            step(&mut state)?;
+        }
+        let err = |e: crate::cuda::CudaError| e.to_string();
+        let mut marks = Vec::with_capacity(blank.steps + 1);
+        marks.push(state.gpu().mark().map_err(err)?);
+        for _ in 0..blank.steps {
+            step(&mut state)?;
+            marks.push(state.gpu().mark().map_err(err)?);
+        }
+        let mut times = Vec::with_capacity(blank.steps);
+        for w in marks.windows(2) {
+            times.push(state.gpu().elapsed_ms(&w[0], &w[1]).map_err(err)?);
+        }
+        state.gpu().start_profile();
+        for _ in 0..options.profile_steps {
+            step(&mut state)?;
+        }
+        let per_step = 1.0 / options.profile_steps.max(1) as f64;
+        let kernels = state
+            .gpu()
+            .finish_profile()
+            .map_err(err)?
+            .into_iter()
+            .map(|k| KernelShare {
+                kernel: k.kernel.to_string(),
+                launches_per_step: k.launches as f64 * per_step,
+                ms_per_step: k.total_ms * per_step,
+            })
+            .collect();
+        let bandwidth = state.gpu().copy_bandwidth().map_err(err)?;
+        let floor = compulsory_bytes(std::mem::size_of::<R>(), M::USES_STRESS, particles as f64, cells) / bandwidth * 1e3;
+        let (median_ms, p10_ms, p90_ms) = percentiles(times);
+        Ok(Measurement {
+            backend: BenchBackend::Cuda,
+            median_ms,
+            p10_ms,
+            p90_ms,
+            bytes_per_fluid_particle: bytes / blank.fluid as f64,
+            kernels,
+            memory_floor_ms: Some(floor),
+            copy_bandwidth: Some(bandwidth),
+            ..blank
+        })
+    })();
+    (timed, Some(state.into_gpu()))
+}
+
+/// Bytes a step must move between the GPU and its memory, however well the kernels use the
+/// caches: every per-particle array each pass reads or writes, once. `real` is the size of the
+/// physics precision; positions are always f64. Neighbours' reads hit the caches after the sort
+/// and are not counted, which makes this a floor.
+pub fn compulsory_bytes(real: usize, stress: bool, particles: f64, cells: f64) -> f64 {
+    let (p, r) = (24.0, real as f64);
+    let hash = p + 4.0;
+    let histogram_and_scatter = 4.0 + 4.0 + 4.0;
+    // Gathers position, velocity, half-step velocity and id through the order array.
+    let reorder = 2.0 * (p + 6.0 * r + 4.0) + 4.0;
+    let density = p + r;
+    let stress_pass = if stress { p + 4.0 * r + 6.0 * r } else { 0.0 };
+    let acceleration = p + 4.0 * r + if stress { 6.0 * r } else { 0.0 } + 3.0 * r;
+    let leapfrog = 2.0 * (p + 6.0 * r);
+    // Counters cleared, counted and scanned; cell starts written and read.
+    let grid = 4.0 * 4.0;
+    particles * (hash + histogram_and_scatter + reorder + density + stress_pass + acceleration + leapfrog) + cells * grid
+}
+
+/// The CPU's model name and the worker threads, for the report.
+fn describe_cpu() -> String {
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines().find(|l| l.starts_with("model name")).and_then(|l| l.split(':').nth(1)).map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    format!("{model}, {} threads", rayon::current_num_threads())
+}
+
+/// Runs every configuration of `options`, smallest first. A GPU is opened once when asked for;
+/// without one a `cuda` measurement is an error that names why.
+pub fn bench(options: &BenchOptions, mut progress: impl FnMut(&Measurement)) -> Result<BenchReport, String> {
+    let mut gpu = open_gpu(options)?;
+    let gpu_name = describe_gpu(&gpu);
+    let mut measurements = Vec::new();
+    let mut bandwidth = None;
+    for &size in &options.sizes {
+        let scene = dam_break(size.per_edge);
+        let initial = initial_particles(&scene, DAM_BREAK_FILE).map_err(|e| e.to_string())?;
+        for &precision in &options.precisions {
+            for &backend in &options.backends {
+                let steps = match backend {
+                    BenchBackend::Cpu if size.per_edge > 40 => options.cpu_large_steps,
+                    _ => options.steps,
+                };
+                let device = if backend == BenchBackend::Cuda { gpu.take() } else { None };
+                let work = Measure { scene: &scene, initial: &initial, size, precision, steps, options, gpu: device };
+                let (result, returned) = match precision {
+                    Precision::F32 => with_model::<f32, _>(&scene, work),
+                    Precision::F64 => with_model::<f64, _>(&scene, work),
+                };
+                if returned.is_some() {
+                    gpu = returned;
+                }
+                let m = result.map_err(|e| format!("{} {} {}: {e}", size.label, precision_name(precision), backend.name()))?;
+                bandwidth = bandwidth.or(m.copy_bandwidth);
+                progress(&m);
+                measurements.push(m);
+            }
+        }
+    }
+    Ok(BenchReport { cpu: describe_cpu(), gpu: gpu_name, gpu_bandwidth: bandwidth, measurements })
+}
+
+pub fn precision_name(p: Precision) -> &'static str {
+    match p {
+        Precision::F32 => "f32",
+        Precision::F64 => "f64",
+    }
+}
+
+#[cfg(feature = "cuda")]
+fn open_gpu(options: &BenchOptions) -> Result<Option<Device>, String> {
+    if !options.backends.contains(&BenchBackend::Cuda) {
+        return Ok(None);
+    }
+    crate::cuda::Gpu::open().map(Some).map_err(|e| format!("--backend cuda: {e}"))
+}
+
+#[cfg(not(feature = "cuda"))]
+fn open_gpu(options: &BenchOptions) -> Result<Option<Device>, String> {
+    if options.backends.contains(&BenchBackend::Cuda) {
+        return Err(
+            "--backend cuda: this coil was built without the CUDA backend (rebuild with `cargo build --release --features cuda`)"
+                .into(),
+        );
+    }
+    Ok(None)
+}
+
+/// Whether `--backend auto` finds a CUDA device, and if not, why.
+pub fn cuda_available() -> Result<(), String> {
+    open_gpu(&BenchOptions {
+        sizes: Vec::new(),
+        precisions: Vec::new(),
+        backends: vec![BenchBackend::Cuda],
+        steps: 0,
+        cpu_large_steps: 0,
+        warmup: 0,
+        profile_steps: 0,
+        quiet: true,
+    })
+    .map(drop)
+}
+
+#[cfg(feature = "cuda")]
+fn describe_gpu(gpu: &Option<Device>) -> Option<String> {
+    gpu.as_ref().map(|g| g.describe())
+}
+
+#[cfg(not(feature = "cuda"))]
+fn describe_gpu(gpu: &Option<Device>) -> Option<String> {
+    gpu.as_ref().map(|d| match *d {})
+}
