@@ -106,7 +106,7 @@ fn fluid_box(scene: &Scene, fluid: f64) -> Scene {
     proxy.inlets.clear();
     proxy.boundaries = vec![Boundary::Box { min_m: [0.0; 3], max_m: [edge; 3], open_top: false }];
     proxy.fluid_blocks = vec![FluidBlock { min_m: [0.0; 3], max_m: [edge; 3], velocity_m_s: [0.0; 3] }];
-    proxy.domain = Domain { min_m: [-pad; 3], max_m: [edge + pad; 3] };
+    proxy.domain = Domain { min_m: [-pad; 3], max_m: [edge + pad; 3], periodic: [false; 3] };
     proxy.simulation.max_fluid_particles = None;
     proxy
 }

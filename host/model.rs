@@ -8,6 +8,7 @@ use coil_kernels::acceleration::{acceleration_pass, AccelerationArgs, StressDive
 use coil_kernels::cell_grid::Neighborhood;
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
+use coil_kernels::topology::{Open, Topology};
 use coil_kernels::velocity_gradient::{stress_pass, StressArgs};
 use coil_kernels::view::{SymTensorViewMut, Vec3View, Vec3ViewMut, View};
 use coil_kernels::Real;
@@ -22,13 +23,13 @@ pub trait Model<R: Real>: Copy + Send + Sync + 'static {
     fn max_viscosity(&self) -> R;
     /// Velocity gradient and stress (when used), then accelerations, for all particles of
     /// `state`, run by `backend`.
-    fn accelerations<B: Passes<R>>(&self, backend: &mut B, state: ParticleState<'_, R>);
+    fn accelerations<B: Passes<R>, T: Topology>(&self, backend: &mut B, state: ParticleState<'_, R, T>);
 }
 
 /// What the acceleration passes read and write, as views a backend built over its own memory.
 #[derive(Clone, Copy)]
-pub struct ParticleState<'a, R> {
-    pub neighborhood: Neighborhood<'a>,
+pub struct ParticleState<'a, R, T = Open> {
+    pub neighborhood: Neighborhood<'a, T>,
     pub fluid: Fluid<R>,
     pub id: View<'a, u32>,
     pub velocity: Vec3View<'a, R>,
@@ -40,8 +41,8 @@ pub struct ParticleState<'a, R> {
 
 /// A backend's way of running the kernels whose arguments depend on the model.
 pub trait Passes<R: Real> {
-    fn stress<Rh: Rheology<R>>(&mut self, args: StressArgs<'_, R, Rh>);
-    fn acceleration<Op: ViscousOperator<R>>(&mut self, args: AccelerationArgs<'_, R, Op>);
+    fn stress<Rh: Rheology<R>, T: Topology>(&mut self, args: StressArgs<'_, R, Rh, T>);
+    fn acceleration<Op: ViscousOperator<R>, T: Topology>(&mut self, args: AccelerationArgs<'_, R, Op, T>);
 }
 
 /// The CPU backend's passes: each kernel function over `n` particles with rayon.
@@ -50,10 +51,10 @@ pub struct CpuPasses {
 }
 
 impl<R: Real> Passes<R> for CpuPasses {
-    fn stress<Rh: Rheology<R>>(&mut self, args: StressArgs<'_, R, Rh>) {
+    fn stress<Rh: Rheology<R>, T: Topology>(&mut self, args: StressArgs<'_, R, Rh, T>) {
         launch(self.n, |i| stress_pass(i, &args));
     }
-    fn acceleration<Op: ViscousOperator<R>>(&mut self, args: AccelerationArgs<'_, R, Op>) {
+    fn acceleration<Op: ViscousOperator<R>, T: Topology>(&mut self, args: AccelerationArgs<'_, R, Op, T>) {
         launch(self.n, |i| acceleration_pass(i, &args));
     }
 }
@@ -101,7 +102,7 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for StressModel<Rh> {
     fn max_viscosity(&self) -> R {
         self.0.max_viscosity()
     }
-    fn accelerations<B: Passes<R>>(&self, backend: &mut B, s: ParticleState<'_, R>) {
+    fn accelerations<B: Passes<R>, T: Topology>(&self, backend: &mut B, s: ParticleState<'_, R, T>) {
         let stress = s.stress.expect("the stress operator allocates stress");
         backend.stress(StressArgs {
             neighborhood: s.neighborhood,
@@ -130,7 +131,7 @@ impl<R: Real> Model<R> for LaplacianModel<R> {
     fn max_viscosity(&self) -> R {
         self.0.max_viscosity()
     }
-    fn accelerations<B: Passes<R>>(&self, backend: &mut B, s: ParticleState<'_, R>) {
+    fn accelerations<B: Passes<R>, T: Topology>(&self, backend: &mut B, s: ParticleState<'_, R, T>) {
         backend.acceleration(AccelerationArgs {
             neighborhood: s.neighborhood,
             fluid: s.fluid,

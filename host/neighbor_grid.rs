@@ -7,6 +7,7 @@ use coil_kernels::cell_grid::{hash_pass, CellGrid, HashArgs, Neighborhood};
 use coil_kernels::counting_sort::{
     chunk_total, count_particle, gather, scan_chunk, scan_chunk_offsets, scatter, sort_bucket, Counters,
 };
+use coil_kernels::topology::{Periodic, Topology};
 use coil_kernels::view::{Vec3View, View, ViewMut};
 use coil_kernels::Real;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -16,6 +17,8 @@ pub const SCAN_CHUNK: usize = 4096;
 
 pub struct NeighborGrid {
     pub grid: CellGrid,
+    /// The domain's periods (0 along open axes; all 0 for an open domain).
+    pub periodic: Periodic,
     cell_key: Vec<u32>,
     counters: Vec<AtomicU32>,
     cell_start: Vec<u32>,
@@ -24,13 +27,21 @@ pub struct NeighborGrid {
 }
 
 impl NeighborGrid {
-    /// A grid of cells of edge `cell_size` (m, the support radius) over the domain box.
-    pub fn new(min: [f64; 3], max: [f64; 3], cell_size: f64, capacity: usize) -> Self {
-        let dims = [0, 1, 2].map(|a| (((max[a] - min[a]) / cell_size).ceil() as u32).max(1));
-        let grid = CellGrid { origin: min, inverse_cell_size: 1.0 / cell_size, dims };
+    /// A grid of cells of edge `cell_size` (m, the support radius) over the domain box; along
+    /// the axes marked `periodic` the box length is split into whole cells of at least that edge.
+    pub fn new(min: [f64; 3], max: [f64; 3], cell_size: f64, periodic: [bool; 3], capacity: usize) -> Self {
+        let length = [0, 1, 2].map(|a| max[a] - min[a]);
+        let dims = [0, 1, 2].map(|a| {
+            let cells = length[a] / cell_size;
+            (if periodic[a] { cells.floor() } else { cells.ceil() } as u32).max(1)
+        });
+        let inverse_cell_size = [0, 1, 2].map(|a| if periodic[a] { dims[a] as f64 / length[a] } else { 1.0 / cell_size });
+        let grid = CellGrid { origin: min, inverse_cell_size, dims };
+        let periodic = Periodic { origin: min, period: [0, 1, 2].map(|a| if periodic[a] { length[a] } else { 0.0 }) };
         let buckets = grid.cell_count() as usize + 1;
         Self {
             grid,
+            periodic,
             cell_key: vec![0; capacity],
             counters: (0..buckets).map(|_| AtomicU32::new(0)).collect(),
             cell_start: vec![0; buckets + 1],
@@ -83,9 +94,14 @@ impl NeighborGrid {
         &mut self.cell_start
     }
 
-    /// The sorted grid for the particles' current order.
-    pub fn neighborhood<'a>(&'a self, position: Vec3View<'a, f64>) -> Neighborhood<'a> {
-        Neighborhood { grid: self.grid, cell_start: View::new(&self.cell_start), position }
+    /// Whether any axis wraps.
+    pub fn is_periodic(&self) -> bool {
+        self.periodic.period.iter().any(|&l| l > 0.0)
+    }
+
+    /// The sorted grid for the particles' current order, in topology `topology`.
+    pub fn neighborhood<'a, T: Topology>(&'a self, position: Vec3View<'a, f64>, topology: T) -> Neighborhood<'a, T> {
+        Neighborhood { grid: self.grid, cell_start: View::new(&self.cell_start), position, topology }
     }
 }
 

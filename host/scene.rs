@@ -150,6 +150,17 @@ impl Viscosity {
 pub struct Domain {
     pub min_m: [f64; 3],
     pub max_m: [f64; 3],
+    /// Axes (x, y, z) along which the domain wraps around: a particle leaving through one face
+    /// re-enters through the opposite one, and neighbors are found across the seam. Each such
+    /// length must be at least 3 support radii and a whole number of particle spacings.
+    #[serde(default)]
+    pub periodic: [bool; 3],
+}
+
+impl Domain {
+    pub fn is_periodic(&self) -> bool {
+        self.periodic.iter().any(|&p| p)
+    }
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
@@ -461,6 +472,28 @@ impl Scene {
                 ),
             );
         }
+        for a in (0..3).filter(|&a| d.periodic[a]) {
+            let length = d.max_m[a] - d.min_m[a];
+            if length < 3.0 * self.support_radius() {
+                return err(
+                    "domain.periodic",
+                    format!(
+                        "axis {a} is periodic but the domain is {length} m long along it, less than 3 support radii ({} m)",
+                        3.0 * self.support_radius()
+                    ),
+                );
+            }
+            let spacings = length / m.particle_spacing_m;
+            if (spacings - spacings.round()).abs() > 1e-6 * spacings {
+                return err(
+                    "domain.periodic",
+                    format!(
+                        "axis {a} is periodic, so its length {length} m must be a whole number of particle spacings ({} m) for the lattice to close across the seam; it is {spacings:.4} spacings",
+                        m.particle_spacing_m
+                    ),
+                );
+            }
+        }
         let inside = |p: [f64; 3]| (0..3).all(|a| p[a] >= d.min_m[a] && p[a] <= d.max_m[a]);
 
         let s = &self.simulation;
@@ -526,6 +559,13 @@ impl Scene {
                 for a in 0..3 {
                     if !(min_m[a] < max_m[a]) {
                         return err(&format!("boundary[{k}].max_m"), format!("must exceed min_m on every axis (axis {a})"));
+                    }
+                    let spans = (min_m[a] - d.min_m[a]).abs() < 1e-9 && (max_m[a] - d.max_m[a]).abs() < 1e-9;
+                    if d.periodic[a] && !spans {
+                        return err(
+                            &format!("boundary[{k}]"),
+                            format!("axis {a} is periodic, so the box must span the domain along it (it has no walls there)"),
+                        );
                     }
                 }
             }

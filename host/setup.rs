@@ -79,13 +79,16 @@ pub fn initial_particles(scene: &Scene, file: &str) -> Result<InitialParticles, 
     let mut p = InitialParticles::default();
     let err = |field: String, reason: String| SceneError { file: file.into(), field, reason };
 
+    let periodic = scene.domain.periodic;
     for (k, b) in scene.boundaries.iter().enumerate() {
         let before = p.boundary.len();
         match *b {
             Boundary::Box { min_m, max_m, open_top } => {
+                // A box has no walls across a periodic axis: there the fluid wraps around.
                 let n = [0, 1, 2].map(|a| cells(max_m[a] - min_m[a], s));
-                let lo = [-layers; 3];
-                let hi = [n[0] + layers, if open_top { n[1] } else { n[1] + layers }, n[2] + layers];
+                let reach = |a: usize| if periodic[a] { 0 } else { layers };
+                let lo = [0, 1, 2].map(|a| -reach(a));
+                let hi = [n[0] + reach(0), if open_top { n[1] } else { n[1] + reach(1) }, n[2] + reach(2)];
                 lattice(min_m, s, lo, hi, |c, _| (0..3).any(|a| c[a] < 0 || c[a] >= n[a]), &mut p.boundary);
             }
             Boundary::Plate { height_m, min_xz_m, max_xz_m } => {

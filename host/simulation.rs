@@ -15,6 +15,7 @@ use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::{leapfrog_pass, LeapfrogArgs};
 use coil_kernels::nozzle::{nozzle_pass, NozzleArgs, NozzleTube};
 use coil_kernels::smoothing::SmoothingKernels;
+use coil_kernels::topology::{Open, Periodic, Topology};
 use coil_kernels::view::View;
 use coil_kernels::{Real, Vec3};
 use rayon::prelude::*;
@@ -132,7 +133,7 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         let runaway_speed = 2.0 * ((2.0 * g_norm * diagonal).sqrt() + jet.max(initial_speed)) + mat.sound_speed_m_s;
         let mut sim = Self {
             particles,
-            grid: NeighborGrid::new(d.min_m, d.max_m, h, boundary_count + fluid_capacity),
+            grid: NeighborGrid::new(d.min_m, d.max_m, h, d.periodic, boundary_count + fluid_capacity),
             fluid,
             model,
             inlets,
@@ -169,9 +170,11 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         self.particles.capacity() * self.particles.bytes_per_particle() + self.grid.bytes()
     }
 
-    /// The neighbor grid of the particles' current order (valid after a step).
-    pub fn neighborhood(&self) -> coil_kernels::cell_grid::Neighborhood<'_> {
-        self.grid.neighborhood(self.particles.position_view())
+    /// The neighbor grid of the particles' current order (valid after a step), with the
+    /// domain's periods (none for an open domain). For output and checks; the step's own passes
+    /// take the open or periodic loop by type.
+    pub fn neighborhood(&self) -> coil_kernels::cell_grid::Neighborhood<'_, Periodic> {
+        self.grid.neighborhood(self.particles.position_view(), self.grid.periodic)
     }
 
     /// The run's inlets.
@@ -207,12 +210,48 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         let added = inject(&mut self.inlets, self.time, dt, room, &mut self.next_id, &mut self.particles);
         self.count_injected(added);
         self.sort_and_density();
+        if self.grid.is_periodic() {
+            self.forces_and_motion(self.grid.periodic, dt);
+        } else {
+            self.forces_and_motion(Open, dt);
+        }
+        self.advance_clock(dt, limit);
+        self.diagnostics = self.measure();
+        self.check()
+    }
+
+    /// Algorithm 1, line 3: neighbors, dropping particles that left the domain; lines 5-8:
+    /// density (pressure is evaluated from it where it is read).
+    fn sort_and_density(&mut self) {
+        let removed = self.grid.sort(&mut self.particles);
+        self.count_removed(removed);
+        if self.grid.is_periodic() {
+            self.density(self.grid.periodic);
+        } else {
+            self.density(Open);
+        }
+    }
+
+    fn density<T: Topology>(&mut self, topology: T) {
+        let p = &mut self.particles;
+        let n = p.len();
+        let args = DensityArgs {
+            neighborhood: self.grid.neighborhood(vec3_view(&p.position, n), topology),
+            fluid: self.fluid,
+            density: view_mut(&mut p.density, n),
+        };
+        launch(n, |i| density_pass(i, &args));
+    }
+
+    /// Algorithm 1, lines 9-19, after the density: stress, accelerations, nozzles and
+    /// leap-frog, with the neighbor loops of topology `T`.
+    fn forces_and_motion<T: Topology>(&mut self, topology: T, dt: f64) {
         let kick_dt = self.kick_dt(dt);
         let p = &mut self.particles;
         let n = p.len();
         // Lines 9-16: velocity gradient and stress, accelerations.
         let state = ParticleState {
-            neighborhood: self.grid.neighborhood(vec3_view(&p.position, n)),
+            neighborhood: self.grid.neighborhood(vec3_view(&p.position, n), topology),
             fluid: self.fluid,
             id: View::new(&p.id[..n]),
             velocity: vec3_view(&p.velocity, n),
@@ -244,12 +283,10 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
                 position: vec3_view_mut(&mut p.position, n),
                 velocity_half: vec3_view_mut(&mut p.velocity_half, n),
                 velocity: vec3_view_mut(&mut p.velocity, n),
+                topology,
             };
             launch(n, |i| leapfrog_pass(i, &args));
         }
-        self.advance_clock(dt, limit);
-        self.diagnostics = self.measure();
-        self.check()
     }
 
     /// Counts particles an inlet just added.
@@ -295,21 +332,6 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             dt_s: self.last_dt,
             stability_bound_s: self.stepper.bound.dt().0,
         })
-    }
-
-    /// Algorithm 1, line 3: neighbors, dropping particles that left the domain; lines 5-8:
-    /// density (pressure is evaluated from it where it is read).
-    fn sort_and_density(&mut self) {
-        let removed = self.grid.sort(&mut self.particles);
-        self.count_removed(removed);
-        let p = &mut self.particles;
-        let n = p.len();
-        let args = DensityArgs {
-            neighborhood: self.grid.neighborhood(vec3_view(&p.position, n)),
-            fluid: self.fluid,
-            density: view_mut(&mut p.density, n),
-        };
-        launch(n, |i| density_pass(i, &args));
     }
 
     /// Largest speed and density error over the fluid, and how many fluid particles run away.

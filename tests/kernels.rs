@@ -4,6 +4,7 @@ use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::{leapfrog_pass, LeapfrogArgs};
 use coil_kernels::smoothing::SmoothingKernels;
+use coil_kernels::topology::{Open, Periodic, Topology};
 use coil_kernels::vec3::{Mat3, Vec3};
 use coil_kernels::velocity_gradient::{rate_of_deformation, shear_rate};
 use coil_kernels::view::{Vec3View, Vec3ViewMut, View};
@@ -135,6 +136,7 @@ fn motion_is_kept<R: Real>() {
                 position: Vec3ViewMut::new(px, py, pz),
                 velocity_half: Vec3ViewMut::new(hx, hy, hz),
                 velocity: Vec3ViewMut::new(vx, vy, vz),
+                topology: Open,
             };
             leapfrog_pass(0, &args);
         }
@@ -177,4 +179,64 @@ fn nozzle_tube_contains_its_bore_upstream_of_the_exit() {
     let rectangle = tube(0, [0.05, 0.01]);
     assert!(rectangle.contains([0.049, 1.05, -0.009]));
     assert!(!rectangle.contains([0.0, 1.05, 0.011]), "beyond the half depth");
+}
+
+/// A fixed pseudo-random sequence in [0, 1).
+fn uniform(state: &mut u64) -> f64 {
+    *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    (*state >> 11) as f64 / (1u64 << 53) as f64
+}
+
+#[test]
+fn the_periodic_neighbor_loop_finds_exactly_the_nearest_images_within_h() {
+    use coil::neighbor_grid::NeighborGrid;
+    use coil::particles::Particles;
+    // Periodic in x (3.4 h: three cells, the fewest allowed) and z (5.1 h), open in y; particles
+    // anywhere, many near the seams.
+    let h = 0.1;
+    let (min, max) = ([0.0, 0.0, 0.0], [0.34, 0.5, 0.51]);
+    let periodic = [true, false, true];
+    let mut grid = NeighborGrid::new(min, max, h, periodic, 2000);
+    let mut p = Particles::<f64>::with_capacity(2000, false);
+    let mut state = 7u64;
+    for id in 0..2000 {
+        let x = [0, 1, 2].map(|a| min[a] + uniform(&mut state) * (max[a] - min[a]));
+        p.push(id, x, [0.0; 3]);
+    }
+    assert_eq!(grid.sort(&mut p), 0);
+    let period = grid.periodic.period;
+    assert_eq!(period, [0.34, 0.0, 0.51]);
+    let nb = grid.neighborhood(p.position_view(), grid.periodic);
+    let image = |d: f64, l: f64| if l > 0.0 { d - l * (d / l).round() } else { d };
+    let n = p.len();
+    for i in 0..n {
+        let mut found = Vec::new();
+        nb.for_each_neighbor(i, h * h, |j, r: Vec3<f64>, r2| found.push((j, [r.x, r.y, r.z], r2)));
+        found.sort_by_key(|f| f.0);
+        let xi = [0, 1, 2].map(|a| p.position[a][i]);
+        let expected: Vec<_> = (0..n)
+            .filter_map(|j| {
+                let d = [0, 1, 2].map(|a| image(xi[a] - p.position[a][j], period[a]));
+                let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                (r2 < h * h).then_some((j, d, r2))
+            })
+            .collect();
+        assert_eq!(found.len(), expected.len(), "particle {i} at {xi:?}");
+        for (f, e) in found.iter().zip(&expected) {
+            assert_eq!(f.0, e.0);
+            for a in 0..3 {
+                assert!((f.1[a] - e.1[a]).abs() < 1e-12, "particle {i}: {f:?} against {e:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn periodic_wrap_moves_a_particle_by_one_period_and_only_along_periodic_axes() {
+    let t = Periodic { origin: [0.0, -1.0, 0.0], period: [0.3, 0.0, 0.6] };
+    assert_eq!(t.wrap([0.31, -2.0, -0.01]), [0.31 - 0.3, -2.0, -0.01 + 0.6]);
+    assert_eq!(t.wrap([0.1, 5.0, 0.2]), [0.1, 5.0, 0.2]);
+    // Exactly on the upper face is the first cell of the next period, that is the lower face.
+    assert_eq!(t.wrap([0.3, 0.0, 0.0])[0], 0.0);
+    assert_eq!(Open.wrap([9.0, -9.0, 1.0]), [9.0, -9.0, 1.0]);
 }

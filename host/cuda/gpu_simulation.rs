@@ -20,6 +20,7 @@ use coil_kernels::density::DensityArgs;
 use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
 use coil_kernels::leapfrog::LeapfrogArgs;
 use coil_kernels::nozzle::NozzleArgs;
+use coil_kernels::topology::{Open, Topology};
 use coil_kernels::velocity_gradient::StressArgs;
 use coil_kernels::view::{SymTensorViewMut, View};
 use coil_kernels::Real;
@@ -155,17 +156,18 @@ impl<R: Real> DeviceState<R> {
     }
 }
 
-/// The PTX entry of a pass in precision `R`: `stem_R`, or `stem_variant_R` (e.g.
-/// `stress_cross_f32`). Names are few and fixed: each is built once and kept.
-fn kernel<R: Real>(stem: &'static str, variant: &'static str) -> &'static str {
+/// The PTX entry of a pass in precision `R`: the stem, then the physics variant and the
+/// topology where they are not empty, then `R` (e.g. `stress_cross_f32`). Names are few and
+/// fixed: each is built once and kept.
+fn kernel<R: Real>(stem: &'static str, variant: &'static str, topology: &'static str) -> &'static str {
     use std::collections::HashMap;
     use std::sync::{Mutex, OnceLock};
-    type Names = HashMap<(&'static str, &'static str, &'static str), &'static str>;
+    type Names = HashMap<[&'static str; 4], &'static str>;
     static NAMES: OnceLock<Mutex<Names>> = OnceLock::new();
     let mut names = NAMES.get_or_init(Default::default).lock().unwrap_or_else(|e| e.into_inner());
-    names.entry((stem, variant, R::NAME)).or_insert_with(|| {
-        let name = if variant.is_empty() { format!("{stem}_{}", R::NAME) } else { format!("{stem}_{variant}_{}", R::NAME) };
-        Box::leak(name.into_boxed_str())
+    names.entry([stem, variant, topology, R::NAME]).or_insert_with(|| {
+        let parts = [stem, variant, topology, R::NAME];
+        Box::leak(parts.iter().filter(|p| !p.is_empty()).copied().collect::<Vec<_>>().join("_").into_boxed_str())
     })
 }
 
@@ -187,11 +189,11 @@ impl GpuPasses<'_> {
 }
 
 impl<R: Real> Passes<R> for GpuPasses<'_> {
-    fn stress<Rh: Rheology<R>>(&mut self, args: StressArgs<'_, R, Rh>) {
-        self.run(kernel::<R>("stress", Rh::NAME), args);
+    fn stress<Rh: Rheology<R>, T: Topology>(&mut self, args: StressArgs<'_, R, Rh, T>) {
+        self.run(kernel::<R>("stress", Rh::NAME, T::NAME), args);
     }
-    fn acceleration<Op: ViscousOperator<R>>(&mut self, args: AccelerationArgs<'_, R, Op>) {
-        self.run(kernel::<R>("acceleration", Op::NAME), args);
+    fn acceleration<Op: ViscousOperator<R>, T: Topology>(&mut self, args: AccelerationArgs<'_, R, Op, T>) {
+        self.run(kernel::<R>("acceleration", Op::NAME, T::NAME), args);
     }
 }
 
@@ -212,6 +214,11 @@ pub struct GpuSimulation<R: Real, M: Model<R>> {
 impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
     /// Moves the run `host` (set up and sorted on the host) onto `gpu`.
     pub fn new(host: Simulation<R, M>, gpu: Gpu) -> Result<Self, CudaError> {
+        if host.grid.is_periodic() {
+            return Err(CudaError::Unsupported(
+                "periodic domains (domain.periodic) run on the CPU backend only; use --backend cpu".into(),
+            ));
+        }
         let capacity = host.particles.capacity();
         let buckets = host.grid.grid.cell_count() as usize + 1;
         // Four layers of every inlet per step is far above what dt at the Eq. (10) bound brings.
@@ -332,7 +339,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         // SAFETY: diagnostics_<R>(count, range_len, args, out), `out` holding one figure per range.
         unsafe {
             self.gpu.launch(
-                kernel::<R>("diagnostics", ""),
+                kernel::<R>("diagnostics", "", ""),
                 ranges as u32,
                 &[&count, &ByValue(DIAGNOSTICS_RANGE as u32), &ByValue(args), &out],
             )?;
@@ -359,6 +366,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
             grid: self.host.grid.grid,
             cell_start: self.device.cell_start.view(self.device.cell_start.len()),
             position: vec3_view(&self.device.position, self.bound),
+            topology: Open,
         }
     }
 
@@ -390,7 +398,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
                 let staged_v = ByValue(d.staged_velocity[a].view(added));
                 for target in [&d.velocity[a], &d.velocity_half[a]] {
                     gpu.launch(
-                        kernel::<R>("append", ""),
+                        kernel::<R>("append", "", ""),
                         added as u32,
                         &[&count, &k, &staged_v, &ByValue(target.view_mut(capacity))],
                     )?;
@@ -450,7 +458,11 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
                 std::mem::swap(&mut d.position[a], &mut d.scratch_f64);
                 for field in [&mut d.velocity[a], &mut d.velocity_half[a]] {
                     let sorted = ByValue(d.scratch_real.view_mut(n));
-                    gpu.launch(kernel::<R>("gather", ""), threads, &[&count, &order, &ByValue(field.view(capacity)), &sorted])?;
+                    gpu.launch(
+                        kernel::<R>("gather", "", ""),
+                        threads,
+                        &[&count, &order, &ByValue(field.view(capacity)), &sorted],
+                    )?;
                     std::mem::swap(field, &mut d.scratch_real);
                 }
             }
@@ -471,7 +483,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
             DensityArgs { neighborhood: self.neighborhood(), fluid: self.host.fluid, density: self.device.density.view_mut(n) };
         let count = self.count();
         // SAFETY: density_<R>(count, args).
-        unsafe { self.gpu.launch(kernel::<R>("density", ""), n as u32, &[&count, &ByValue(args)]) }
+        unsafe { self.gpu.launch(kernel::<R>("density", "", ""), n as u32, &[&count, &ByValue(args)]) }
     }
 
     /// Fluid inside a nozzle's tube moves with the jet (see `coil_kernels::nozzle`).
@@ -489,7 +501,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
                 velocity_half: vec3_view_mut(&d.velocity_half, n),
             };
             // SAFETY: nozzle_<R>(count, args).
-            unsafe { self.gpu.launch(kernel::<R>("nozzle", ""), n as u32, &[&count, &ByValue(args)])? };
+            unsafe { self.gpu.launch(kernel::<R>("nozzle", "", ""), n as u32, &[&count, &ByValue(args)])? };
         }
         Ok(())
     }
@@ -507,9 +519,10 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
             position: vec3_view_mut(&d.position, n),
             velocity_half: vec3_view_mut(&d.velocity_half, n),
             velocity: vec3_view_mut(&d.velocity, n),
+            topology: Open,
         };
         let count = self.count();
         // SAFETY: leapfrog_<R>(count, args).
-        unsafe { self.gpu.launch(kernel::<R>("leapfrog", ""), n as u32, &[&count, &ByValue(args)]) }
+        unsafe { self.gpu.launch(kernel::<R>("leapfrog", "", ""), n as u32, &[&count, &ByValue(args)]) }
     }
 }

@@ -5,6 +5,7 @@ use crate::density::pressure;
 use crate::fluid::Fluid;
 use crate::real::Real;
 use crate::smoothing::SmoothingKernels;
+use crate::topology::{Open, Topology};
 use crate::vec3::{SymTensor, Vec3};
 use crate::view::{SymTensorView, Vec3View, Vec3ViewMut, View};
 
@@ -82,9 +83,9 @@ impl<R: Real> ViscousOperator<R> for VelocityLaplacian<'_, R> {
 /// -(1/rho_i) sum_j m_j (p_i + p_j) / (2 rho_j) grad_i W (Müller 2003's force over rho_i), plus
 /// the viscous operator, plus gravity. Symmetric in i and j: pair forces cancel.
 #[inline(always)]
-pub fn acceleration<R: Real, Op: ViscousOperator<R>>(
+pub fn acceleration<R: Real, Op: ViscousOperator<R>, T: Topology>(
     i: usize,
-    neighborhood: &Neighborhood,
+    neighborhood: &Neighborhood<T>,
     density: &View<R>,
     fluid: &Fluid<R>,
     viscous: &Op,
@@ -107,8 +108,8 @@ pub fn acceleration<R: Real, Op: ViscousOperator<R>>(
 /// Arguments of the acceleration pass.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
-pub struct AccelerationArgs<'a, R, Op> {
-    pub neighborhood: Neighborhood<'a>,
+pub struct AccelerationArgs<'a, R, Op, T = Open> {
+    pub neighborhood: Neighborhood<'a, T>,
     pub fluid: Fluid<R>,
     pub viscous: Op,
     pub id: View<'a, u32>,
@@ -118,7 +119,7 @@ pub struct AccelerationArgs<'a, R, Op> {
 
 /// The acceleration pass for particle `i`; fixed boundary particles get zero.
 #[inline(always)]
-pub fn acceleration_pass<R: Real, Op: ViscousOperator<R>>(i: usize, a: &AccelerationArgs<R, Op>) {
+pub fn acceleration_pass<R: Real, Op: ViscousOperator<R>, T: Topology>(i: usize, a: &AccelerationArgs<R, Op, T>) {
     let acc = if a.fluid.is_boundary(a.id.at(i)) {
         Vec3::zero()
     } else {

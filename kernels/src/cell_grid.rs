@@ -1,10 +1,12 @@
 //! The uniform neighbor grid: cell hashing (Algorithm 1, line 3) and the 27-cell neighbor loop.
 //!
-//! Cells are cubes of edge h covering the domain box, linearly indexed with x fastest. Particles
+//! Cells are boxes of edge at least h covering the domain box (h along open axes; along a
+//! periodic axis the period split into whole cells), linearly indexed with x fastest. Particles
 //! are kept sorted by cell, so a cell's particles are the contiguous run
-//! `cell_start[c] .. cell_start[c + 1]` and three x-adjacent cells form one run.
+//! `cell_start[c] .. cell_start[c + 1]` and x-adjacent cells form one run.
 
 use crate::real::Real;
+use crate::topology::{minimum_image, Open, Periodic, Topology};
 use crate::vec3::Vec3;
 use crate::view::{Vec3View, View, ViewMut};
 
@@ -14,8 +16,8 @@ use crate::view::{Vec3View, View, ViewMut};
 pub struct CellGrid {
     /// Lower corner of the domain box (m).
     pub origin: [f64; 3],
-    /// 1 / cell edge (1/m); the cell edge is the support radius h.
-    pub inverse_cell_size: f64,
+    /// 1 / cell edge along each axis (1/m); every edge is at least the support radius h.
+    pub inverse_cell_size: [f64; 3],
     /// Cells along x, y, z.
     pub dims: [u32; 3],
 }
@@ -32,7 +34,7 @@ impl CellGrid {
     pub fn cell_coords(&self, p: [f64; 3]) -> Option<[u32; 3]> {
         let mut c = [0u32; 3];
         for a in 0..3 {
-            let f = (p[a] - self.origin[a]) * self.inverse_cell_size;
+            let f = (p[a] - self.origin[a]) * self.inverse_cell_size[a];
             // `!(f >= 0)` also rejects NaN.
             if !(f >= 0.0) || f >= self.dims[a] as f64 {
                 return None;
@@ -74,10 +76,10 @@ pub fn hash_pass(i: usize, a: &HashArgs) {
     unsafe { a.cell_key.write(i, hash(i, &a.grid, &a.position)) };
 }
 
-/// The sorted grid that neighbor loops read.
+/// The sorted grid that neighbor loops read, in a domain of topology `T`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
-pub struct Neighborhood<'a> {
+pub struct Neighborhood<'a, T = Open> {
     pub grid: CellGrid,
     /// `cell_count() + 2` entries: the start of each cell's run, then the live-particle count,
     /// then the total including particles that left the domain.
@@ -85,13 +87,25 @@ pub struct Neighborhood<'a> {
     /// Particle positions (m), sorted by cell. Kept in f64 so that slow particles never lose
     /// motion far from the origin; differences are taken in f64 and then rounded to `R`.
     pub position: Vec3View<'a, f64>,
+    pub topology: T,
 }
 
-impl Neighborhood<'_> {
+impl<T: Topology> Neighborhood<'_, T> {
     /// Calls `f(j, x_i - x_j, |x_i - x_j|^2)` for every particle j with |x_i - x_j| < h,
-    /// including i itself, in a fixed order (cells in index order, then sorted order).
+    /// including i itself, in a fixed order (cells in index order, then sorted order). Across a
+    /// periodic face x_i - x_j is the nearest image's.
     #[inline(always)]
-    pub fn for_each_neighbor<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, i: usize, h2: R, mut f: F) {
+    pub fn for_each_neighbor<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, i: usize, h2: R, f: F) {
+        if T::PERIODIC {
+            self.for_each_neighbor_periodic(i, h2, f);
+        } else {
+            self.for_each_neighbor_open(i, h2, f);
+        }
+    }
+
+    /// The open domain's loop: three x-adjacent cells are one contiguous run.
+    #[inline(always)]
+    fn for_each_neighbor_open<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, i: usize, h2: R, mut f: F) {
         let xi = self.position.at(i);
         let Some(c) = self.grid.cell_coords(xi) else {
             return;
@@ -116,6 +130,52 @@ impl Neighborhood<'_> {
                     if r2 < h2_f64 {
                         let r_ij = Vec3::new(R::from_f64(dx), R::from_f64(dy), R::from_f64(dz));
                         f(j, r_ij, R::from_f64(r2));
+                    }
+                }
+            }
+        }
+    }
+
+    /// The periodic domain's loop: cells wrap along periodic axes (which hold at least 3 cells,
+    /// so no cell is visited twice), and x-runs split where they cross the seam.
+    #[inline(always)]
+    fn for_each_neighbor_periodic<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, i: usize, h2: R, mut f: F) {
+        let xi = self.position.at(i);
+        let Some(c) = self.grid.cell_coords(xi) else {
+            return;
+        };
+        let period = self.topology.periods();
+        let wrap = Periodic { origin: self.grid.origin, period };
+        let h2_f64 = h2.to_f64();
+        let dx_cells = self.grid.dims[0];
+        // The x cells c-1..=c+1 as at most two contiguous runs.
+        let mut runs = [(0u32, 0u32); 2];
+        let run_count = if period[0] > 0.0 && c[0] == 0 {
+            runs = [(0, 1), (dx_cells - 1, dx_cells - 1)];
+            2
+        } else if period[0] > 0.0 && c[0] == dx_cells - 1 {
+            runs = [(0, 0), (dx_cells - 2, dx_cells - 1)];
+            2
+        } else {
+            runs[0] = (c[0].saturating_sub(1), if c[0] + 1 < dx_cells { c[0] + 1 } else { c[0] });
+            1
+        };
+        for dz in -1..=1 {
+            let Some(z) = wrap.neighbor_cell(&self.grid, 2, c[2], dz) else { continue };
+            for dy in -1..=1 {
+                let Some(y) = wrap.neighbor_cell(&self.grid, 1, c[1], dy) else { continue };
+                for &(x_lo, x_hi) in &runs[..run_count] {
+                    let start = self.cell_start.at(self.grid.linear_index([x_lo, y, z]) as usize) as usize;
+                    let end = self.cell_start.at(self.grid.linear_index([x_hi, y, z]) as usize + 1) as usize;
+                    for j in start..end {
+                        let dx = minimum_image(xi[0] - self.position.x.at(j), period[0]);
+                        let dy = minimum_image(xi[1] - self.position.y.at(j), period[1]);
+                        let dz = minimum_image(xi[2] - self.position.z.at(j), period[2]);
+                        let r2 = dx * dx + dy * dy + dz * dz;
+                        if r2 < h2_f64 {
+                            let r_ij = Vec3::new(R::from_f64(dx), R::from_f64(dy), R::from_f64(dz));
+                            f(j, r_ij, R::from_f64(r2));
+                        }
                     }
                 }
             }

@@ -3,12 +3,13 @@
 use crate::cell_grid::Neighborhood;
 use crate::fluid::Fluid;
 use crate::real::Real;
+use crate::topology::{Open, Topology};
 use crate::view::ViewMut;
 
 /// Density by direct summation with poly6, Eq. (5): rho_i = sum_j m_j W(x_ij) (kg/m^3).
 /// Boundary particles get theirs the same way (paper Sec. III-B).
 #[inline(always)]
-pub fn density<R: Real>(i: usize, neighborhood: &Neighborhood, fluid: &Fluid<R>) -> R {
+pub fn density<R: Real, T: Topology>(i: usize, neighborhood: &Neighborhood<T>, fluid: &Fluid<R>) -> R {
     let mut sum = R::ZERO;
     neighborhood.for_each_neighbor(i, fluid.kernels.h2, |_, _, r2: R| sum += fluid.kernels.poly6(r2));
     sum * fluid.mass
@@ -23,8 +24,8 @@ pub fn pressure<R: Real>(density: R, fluid: &Fluid<R>) -> R {
 /// Arguments of the density pass.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
-pub struct DensityArgs<'a, R> {
-    pub neighborhood: Neighborhood<'a>,
+pub struct DensityArgs<'a, R, T = Open> {
+    pub neighborhood: Neighborhood<'a, T>,
     pub fluid: Fluid<R>,
     pub density: ViewMut<'a, R>,
 }
@@ -32,7 +33,7 @@ pub struct DensityArgs<'a, R> {
 /// The density pass for particle `i`. Pressure is not stored: Eq. (6) is cheaper to evaluate
 /// where it is read than to load.
 #[inline(always)]
-pub fn density_pass<R: Real>(i: usize, a: &DensityArgs<R>) {
+pub fn density_pass<R: Real, T: Topology>(i: usize, a: &DensityArgs<R, T>) {
     // SAFETY: invocation i owns entry i.
     unsafe { a.density.write(i, density(i, &a.neighborhood, &a.fluid)) };
 }

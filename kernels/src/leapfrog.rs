@@ -2,13 +2,16 @@
 
 use crate::fluid::Fluid;
 use crate::real::Real;
+use crate::topology::{Open, Topology};
 use crate::view::{Vec3View, Vec3ViewMut, View};
 
 /// Arguments of the integration pass.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
-pub struct LeapfrogArgs<'a, R> {
+pub struct LeapfrogArgs<'a, R, T = Open> {
     pub fluid: Fluid<R>,
+    /// Moves particles that crossed a periodic face back into the domain.
+    pub topology: T,
     /// This step's dt (s).
     pub dt: R,
     /// Interval over which the half-step velocity is kicked (s): (dt_prev + dt) / 2, or dt / 2
@@ -30,7 +33,7 @@ pub struct LeapfrogArgs<'a, R> {
 /// Leap-frog for particle `i`: v_{n+1/2} = v_{n-1/2} + a_n dt, x_{n+1} = x_n + v_{n+1/2} dt.
 /// Fixed boundary particles do not move.
 #[inline(always)]
-pub fn leapfrog_pass<R: Real>(i: usize, a: &LeapfrogArgs<R>) {
+pub fn leapfrog_pass<R: Real, T: Topology>(i: usize, a: &LeapfrogArgs<R, T>) {
     if a.fluid.is_boundary(a.id.at(i)) {
         return;
     }
@@ -48,7 +51,7 @@ pub fn leapfrog_pass<R: Real>(i: usize, a: &LeapfrogArgs<R>) {
     // SAFETY: invocation i owns entry i.
     unsafe {
         a.velocity_half.write(i, v_half);
-        a.position.write(i, x);
+        a.position.write(i, a.topology.wrap(x));
         a.velocity.write(i, v);
     }
 }

@@ -28,6 +28,7 @@ pub mod leapfrog;
 pub mod nozzle;
 pub mod real;
 pub mod smoothing;
+pub mod topology;
 pub mod vec3;
 pub mod velocity_gradient;
 pub mod view;

@@ -14,6 +14,7 @@ use crate::density::{density_pass, DensityArgs};
 use crate::diagnostics::{diagnostics_pass, DiagnosticsArgs, StateFigures};
 use crate::leapfrog::{leapfrog_pass, LeapfrogArgs};
 use crate::nozzle::{nozzle_pass, NozzleArgs};
+use crate::topology::Open;
 use crate::velocity_gradient::{stress_pass, StressArgs};
 use crate::view::{View, ViewMut};
 use core::arch::nvptx;
@@ -44,36 +45,36 @@ macro_rules! per_index_kernel {
 }
 
 per_index_kernel!(hash, HashArgs<'static>, hash_pass);
-per_index_kernel!(density_f32, DensityArgs<'static, f32>, density_pass::<f32>);
-per_index_kernel!(density_f64, DensityArgs<'static, f64>, density_pass::<f64>);
-per_index_kernel!(stress_newtonian_f32, StressArgs<'static, f32, Newtonian<f32>>, stress_pass::<f32, Newtonian<f32>>);
-per_index_kernel!(stress_newtonian_f64, StressArgs<'static, f64, Newtonian<f64>>, stress_pass::<f64, Newtonian<f64>>);
-per_index_kernel!(stress_cross_f32, StressArgs<'static, f32, Cross<f32>>, stress_pass::<f32, Cross<f32>>);
-per_index_kernel!(stress_cross_f64, StressArgs<'static, f64, Cross<f64>>, stress_pass::<f64, Cross<f64>>);
+per_index_kernel!(density_f32, DensityArgs<'static, f32>, density_pass::<f32, Open>);
+per_index_kernel!(density_f64, DensityArgs<'static, f64>, density_pass::<f64, Open>);
+per_index_kernel!(stress_newtonian_f32, StressArgs<'static, f32, Newtonian<f32>>, stress_pass::<f32, Newtonian<f32>, Open>);
+per_index_kernel!(stress_newtonian_f64, StressArgs<'static, f64, Newtonian<f64>>, stress_pass::<f64, Newtonian<f64>, Open>);
+per_index_kernel!(stress_cross_f32, StressArgs<'static, f32, Cross<f32>>, stress_pass::<f32, Cross<f32>, Open>);
+per_index_kernel!(stress_cross_f64, StressArgs<'static, f64, Cross<f64>>, stress_pass::<f64, Cross<f64>, Open>);
 per_index_kernel!(
     acceleration_stress_f32,
     AccelerationArgs<'static, f32, StressDivergence<'static, f32>>,
-    acceleration_pass::<f32, StressDivergence<'static, f32>>
+    acceleration_pass::<f32, StressDivergence<'static, f32>, Open>
 );
 per_index_kernel!(
     acceleration_stress_f64,
     AccelerationArgs<'static, f64, StressDivergence<'static, f64>>,
-    acceleration_pass::<f64, StressDivergence<'static, f64>>
+    acceleration_pass::<f64, StressDivergence<'static, f64>, Open>
 );
 per_index_kernel!(
     acceleration_laplacian_f32,
     AccelerationArgs<'static, f32, VelocityLaplacian<'static, f32>>,
-    acceleration_pass::<f32, VelocityLaplacian<'static, f32>>
+    acceleration_pass::<f32, VelocityLaplacian<'static, f32>, Open>
 );
 per_index_kernel!(
     acceleration_laplacian_f64,
     AccelerationArgs<'static, f64, VelocityLaplacian<'static, f64>>,
-    acceleration_pass::<f64, VelocityLaplacian<'static, f64>>
+    acceleration_pass::<f64, VelocityLaplacian<'static, f64>, Open>
 );
 per_index_kernel!(nozzle_f32, NozzleArgs<'static, f32>, nozzle_pass::<f32>);
 per_index_kernel!(nozzle_f64, NozzleArgs<'static, f64>, nozzle_pass::<f64>);
-per_index_kernel!(leapfrog_f32, LeapfrogArgs<'static, f32>, leapfrog_pass::<f32>);
-per_index_kernel!(leapfrog_f64, LeapfrogArgs<'static, f64>, leapfrog_pass::<f64>);
+per_index_kernel!(leapfrog_f32, LeapfrogArgs<'static, f32>, leapfrog_pass::<f32, Open>);
+per_index_kernel!(leapfrog_f64, LeapfrogArgs<'static, f64>, leapfrog_pass::<f64, Open>);
 
 #[no_mangle]
 pub unsafe extern "ptx-kernel" fn count_particles(

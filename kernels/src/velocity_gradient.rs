@@ -4,15 +4,16 @@ use crate::cell_grid::Neighborhood;
 use crate::cross_viscosity::Rheology;
 use crate::fluid::Fluid;
 use crate::real::Real;
+use crate::topology::{Open, Topology};
 use crate::vec3::{Mat3, SymTensor, Vec3};
 use crate::view::{SymTensorViewMut, Vec3View, View};
 
 /// Velocity gradient, Eq. (8): grad v_i = sum_j (m_j / rho_j) (v_j - v_i) ⊗ grad_i W(x_ij)
 /// (1/s), with `m[a][b] = d v_a / d x_b`.
 #[inline(always)]
-pub fn velocity_gradient<R: Real>(
+pub fn velocity_gradient<R: Real, T: Topology>(
     i: usize,
-    neighborhood: &Neighborhood,
+    neighborhood: &Neighborhood<T>,
     velocity: &Vec3View<R>,
     density: &View<R>,
     fluid: &Fluid<R>,
@@ -50,8 +51,8 @@ pub fn stress<R: Real, Rh: Rheology<R>>(deformation: SymTensor<R>, density: R, r
 /// Arguments of the velocity-gradient-and-stress pass.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
-pub struct StressArgs<'a, R, Rh> {
-    pub neighborhood: Neighborhood<'a>,
+pub struct StressArgs<'a, R, Rh, T = Open> {
+    pub neighborhood: Neighborhood<'a, T>,
     pub fluid: Fluid<R>,
     pub rheology: Rh,
     /// Velocity at the current full step (m/s).
@@ -62,7 +63,7 @@ pub struct StressArgs<'a, R, Rh> {
 
 /// The stress pass for particle `i` (boundary particles included: Eq. (9) reads their stress).
 #[inline(always)]
-pub fn stress_pass<R: Real, Rh: Rheology<R>>(i: usize, a: &StressArgs<R, Rh>) {
+pub fn stress_pass<R: Real, Rh: Rheology<R>, T: Topology>(i: usize, a: &StressArgs<R, Rh, T>) {
     let grad = velocity_gradient(i, &a.neighborhood, &a.velocity, &a.density, &a.fluid);
     let tau = stress(rate_of_deformation(grad), a.density.at(i), &a.rheology);
     // SAFETY: invocation i owns entry i.
