@@ -21,3 +21,4 @@ pub mod scene_override;
 pub mod setup;
 pub mod simulation;
 pub mod time_step;
+pub mod validation;

@@ -126,6 +126,17 @@ enum Command {
         #[arg(long, default_value = "out/bench")]
         out: PathBuf,
     },
+    /// Compare coil with published references (start-up Poiseuille flow against Morris et al.
+    /// 1997 with both viscosity operators, steady Poiseuille flow of Cross fluids), print each
+    /// error next to its tolerance, and write PNG plots of simulated against reference profiles.
+    Validate {
+        /// Coarser resolutions only (seconds instead of minutes).
+        #[arg(long)]
+        quick: bool,
+        /// Output folder for plots and validate.md.
+        #[arg(long, default_value = "out/validate")]
+        out: PathBuf,
+    },
     /// List the shipped scenes, one line each, with what each reproduces.
     Scenes {
         /// Folder of scene files.
@@ -196,6 +207,14 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Scenes { dir } => list_scenes(&dir),
+        Command::Validate { quick, out } => match validate_command(quick, &out) {
+            Ok(true) => ExitCode::SUCCESS,
+            Ok(false) => ExitCode::from(1),
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        },
         Command::Bench { sizes, precision, backend, steps, cpu_large_steps, warmup, profile_steps, threads, out } => {
             let options = set_threads(threads).and_then(|()| {
                 let sizes = sizes
@@ -352,6 +371,39 @@ fn bench_command(options: &BenchOptions, out: &Path) -> Result<(), String> {
     println!("{text}");
     println!("report in {}", out.display());
     Ok(())
+}
+
+/// `coil validate`: runs the cases, prints and writes the table; true when all pass.
+fn validate_command(quick: bool, out: &Path) -> Result<bool, String> {
+    use coil::scene::ViscosityOperator;
+    use coil::validation::{cross_poiseuille, startup_poiseuille, CaseResult};
+    std::fs::create_dir_all(out).map_err(|e| format!("--out: {} cannot be created: {e}", out.display()))?;
+    let resolutions: &[usize] = if quick { &[10, 20] } else { &[10, 20, 30] };
+    let cross_across = if quick { 10 } else { 20 };
+    type Case<'a> = Box<dyn Fn() -> Result<CaseResult, String> + 'a>;
+    let mut cases: Vec<Case> = Vec::new();
+    for &op in &[ViscosityOperator::Stress, ViscosityOperator::Laplacian] {
+        for &across in resolutions {
+            cases.push(Box::new(move || startup_poiseuille(across, op, Some(out))));
+        }
+    }
+    for (k, n) in [(10.0, 1.0), (10.0, 0.5), (100.0, 0.5)] {
+        cases.push(Box::new(move || cross_poiseuille(cross_across, k, n, Some(out))));
+    }
+    let mut table = String::from("| case | error | tolerance | result | wall s | measured as |\n|---|---:|---:|---|---:|---|\n");
+    let mut all = true;
+    for case in cases {
+        let r = case()?;
+        let verdict = if r.passed() { "pass" } else { "FAIL" };
+        all &= r.passed();
+        println!("{:<70} error {:>7.4}  tolerance {:.4}  {verdict}  ({:.0} s)", r.case, r.error, r.tolerance, r.wall_s);
+        table += &format!("| {} | {:.4} | {:.4} | {verdict} | {:.0} | {} |\n", r.case, r.error, r.tolerance, r.wall_s, r.measure);
+    }
+    let path = out.join("validate.md");
+    write_atomically(&path, format!("# coil validate\n\n{table}").as_bytes())
+        .map_err(|e| format!("{}: cannot be written: {e}", path.display()))?;
+    println!("table and plots in {}", out.display());
+    Ok(all)
 }
 
 /// `coil scenes`: every scene file in `dir` with its name and description.

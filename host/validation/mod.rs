@@ -1,0 +1,144 @@
+//! Validation against references nobody on the team produced: `coil validate` and its tests.
+
+pub mod poiseuille;
+
+use crate::plot::{Axis, Chart, Line, Series, PALETTE};
+use crate::scene::ViscosityOperator;
+use poiseuille::{cross_steady_velocity, relative_max_error, simulate, startup_velocity, Channel, CrossLaw};
+use std::path::Path;
+use std::time::Instant;
+
+/// One comparison of a simulation with its reference.
+#[derive(Debug, Clone)]
+pub struct CaseResult {
+    pub case: String,
+    /// What the error is measured as, and the sound speed used.
+    pub measure: String,
+    pub error: f64,
+    pub tolerance: f64,
+    pub wall_s: f64,
+    /// The PNG of simulated against reference profiles, when written.
+    pub plot: Option<String>,
+}
+
+impl CaseResult {
+    pub fn passed(&self) -> bool {
+        self.error <= self.tolerance
+    }
+}
+
+/// Morris et al. 1997's sampling times, in units of L^2 / nu, and a late time that is steady to
+/// 6e-4 of the peak.
+pub const MORRIS_TIMES: [f64; 5] = [0.0225, 0.045, 0.1125, 0.225, 0.75];
+
+fn operator_name(op: ViscosityOperator) -> &'static str {
+    match op {
+        ViscosityOperator::Stress => "paper's operator (Eq. 8, 9)",
+        ViscosityOperator::Laplacian => "Laplacian operator (Muller 2003)",
+    }
+}
+
+/// Simulated points and reference curves of each sampled time, u over `scale` against y / L.
+fn profile_chart(title: String, gap: f64, scale: f64, samples: &[(String, Vec<[f64; 2]>, Vec<[f64; 2]>)]) -> Chart {
+    let mut series = Vec::new();
+    for (k, (label, simulated, reference)) in samples.iter().enumerate() {
+        let c = PALETTE[k % PALETTE.len()];
+        let norm = |p: &[f64; 2]| [p[0] / gap, p[1] / scale];
+        series.push(Series {
+            label: format!("{label} ref"),
+            color: c,
+            points: reference.iter().map(norm).collect(),
+            line: Line::Solid,
+            marker: 0.0,
+        });
+        series.push(Series {
+            label: format!("{label} sph"),
+            color: c,
+            points: simulated.iter().map(norm).collect(),
+            line: Line::None,
+            marker: 2.0,
+        });
+    }
+    Chart { title, x: Axis::linear("y / L"), y: Axis::linear("u / u_max"), series }
+}
+
+/// The start-up Poiseuille flow against Morris et al.'s series, at `across` particles over the
+/// gap: L-infinity error over all sampled times, relative to the steady peak.
+pub fn startup_poiseuille(across: usize, op: ViscosityOperator, out: Option<&Path>) -> Result<CaseResult, String> {
+    let channel = Channel::morris(across, op);
+    let started = Instant::now();
+    let times = MORRIS_TIMES.map(|t| t * channel.gap_m * channel.gap_m / channel.nu0_m2_s);
+    let profiles = simulate(&channel, false, &times)?;
+    let peak = channel.newtonian_peak();
+    let mut error: f64 = 0.0;
+    let mut samples = Vec::new();
+    for (&t, profile) in times.iter().zip(&profiles) {
+        error = error.max(relative_max_error(profile, |y| startup_velocity(&channel, y, t), peak));
+        let reference =
+            (0..=100).map(|k| k as f64 * channel.gap_m / 100.0).map(|y| [y, startup_velocity(&channel, y, t)]).collect();
+        samples.push((format!("t={t:.4}s"), profile.clone(), reference));
+    }
+    let case = format!("start-up Poiseuille, {}, {across} across", operator_name(op));
+    let plot = out
+        .map(|dir| {
+            let name =
+                format!("poiseuille_{}_{across}.png", if op == ViscosityOperator::Stress { "stress" } else { "laplacian" });
+            let path = dir.join(&name);
+            profile_chart(case.clone(), channel.gap_m, peak, &samples)
+                .render(900, 640)
+                .save(&path)
+                .map(|()| path.display().to_string())
+                .map_err(|e| format!("{}: cannot be written: {e}", path.display()))
+        })
+        .transpose()?;
+    Ok(CaseResult {
+        case,
+        measure: format!(
+            "max |u - u_ref| / u_max at nu t / L^2 = {MORRIS_TIMES:?}; c = {} m/s (Mach 0.01)",
+            channel.sound_speed_m_s
+        ),
+        error,
+        tolerance: 0.03,
+        wall_s: started.elapsed().as_secs_f64(),
+        plot,
+    })
+}
+
+/// The steady Poiseuille flow of a Cross fluid (K in s, n), paper's operator, against the
+/// profile integrated from its exact shear stress: L-infinity error over the centre velocity.
+pub fn cross_poiseuille(across: usize, k_s: f64, n: f64, out: Option<&Path>) -> Result<CaseResult, String> {
+    let law = CrossLaw { nu_inf_m2_s: 0.25e-6, k_s, n };
+    let channel = Channel { cross: Some(law), ..Channel::morris(across, ViscosityOperator::Stress) };
+    let started = Instant::now();
+    // The slowest mode decays at the rate of nu_inf: 0.75 L^2 / nu_inf leaves e^-30 of it.
+    let end = 0.75 * channel.gap_m * channel.gap_m / law.nu_inf_m2_s;
+    let profile = simulate(&channel, false, &[end])?.remove(0);
+    let ys: Vec<f64> = profile.iter().map(|p| p[0]).collect();
+    let reference = cross_steady_velocity(&channel, &law, &ys);
+    let centre = cross_steady_velocity(&channel, &law, &[0.5 * channel.gap_m])[0];
+    let error = profile.iter().zip(&reference).map(|(p, r)| (p[1] - r).abs()).fold(0.0, f64::max) / centre;
+    let case = format!("steady Cross Poiseuille K = {k_s} s, n = {n}, {across} across");
+    let plot = out
+        .map(|dir| {
+            let path = dir.join(format!("cross_poiseuille_k{k_s}_n{n}_{across}.png"));
+            let curve_y: Vec<f64> = (0..=100).map(|k| k as f64 * channel.gap_m / 100.0).collect();
+            let curve = curve_y.iter().zip(cross_steady_velocity(&channel, &law, &curve_y)).map(|(&y, u)| [y, u]).collect();
+            profile_chart(case.clone(), channel.gap_m, centre, &[("steady".into(), profile.clone(), curve)])
+                .render(900, 640)
+                .save(&path)
+                .map(|()| path.display().to_string())
+                .map_err(|e| format!("{}: cannot be written: {e}", path.display()))
+        })
+        .transpose()?;
+    Ok(CaseResult {
+        case,
+        measure: format!(
+            "max |u - u_ref| / u_centre at t = {end} s (steady); nu0 = 1e-6, nu_inf = 2.5e-7 m^2/s; c = {} m/s",
+            channel.sound_speed_m_s
+        ),
+        error,
+        tolerance: 0.03,
+        wall_s: started.elapsed().as_secs_f64(),
+        plot,
+    })
+}

@@ -1,0 +1,230 @@
+//! Plane Poiseuille flow between plates at y = 0 and y = L, driven by a body force F along x,
+//! periodic in x and z: the start-up of a Newtonian fluid against Morris, Fox & Zhu (1997)'s
+//! series solution, and the steady flow of a Cross fluid against the profile integrated from
+//! its exact shear stress.
+
+use crate::model::{with_model, Model, WithModel};
+use crate::scene::{Scene, ViscosityOperator};
+use crate::setup::initial_particles;
+use crate::simulation::Simulation;
+use coil_kernels::Real;
+use std::f64::consts::PI;
+
+/// Morris et al. 1997's channel: L = 1 mm, nu = 1e-6 m^2/s, F = 2e-4 m/s^2, rho0 = 1000
+/// kg/m^3, so u_max = F L^2 / (8 nu) = 2.5e-5 m/s and the flow settles over L^2 / nu = 1 s.
+#[derive(Debug, Clone, Copy)]
+pub struct Channel {
+    /// Plate gap L (m).
+    pub gap_m: f64,
+    /// Body force per unit mass F (m/s^2).
+    pub force_m_s2: f64,
+    /// nu0 (m^2/s); with `cross` also nu_inf, K and n.
+    pub nu0_m2_s: f64,
+    pub cross: Option<CrossLaw>,
+    /// Particles across the gap.
+    pub across: usize,
+    pub operator: ViscosityOperator,
+    /// c (m/s).
+    pub sound_speed_m_s: f64,
+    /// Multiplies the automatic dt.
+    pub safety_factor: f64,
+}
+
+/// The Cross model, Eq. (3), by its constants.
+#[derive(Debug, Clone, Copy)]
+pub struct CrossLaw {
+    pub nu_inf_m2_s: f64,
+    pub k_s: f64,
+    pub n: f64,
+}
+
+impl CrossLaw {
+    /// nu(gamma) (m^2/s), Eq. (3).
+    pub fn viscosity(&self, nu0: f64, shear_rate: f64) -> f64 {
+        self.nu_inf_m2_s + (nu0 - self.nu_inf_m2_s) / (1.0 + (self.k_s * shear_rate).powf(self.n))
+    }
+}
+
+impl Channel {
+    /// Morris et al.'s Newtonian case with `across` particles over the gap.
+    pub fn morris(across: usize, operator: ViscosityOperator) -> Self {
+        Self {
+            gap_m: 1e-3,
+            force_m_s2: 2e-4,
+            nu0_m2_s: 1e-6,
+            cross: None,
+            across,
+            operator,
+            // Mach 0.01 at u_max = 2.5e-5 m/s; dt stays set by the viscous term of Eq. (10).
+            sound_speed_m_s: 2.5e-3,
+            safety_factor: 1.0,
+        }
+    }
+
+    /// Steady centre-line speed of the Newtonian flow F L^2 / (8 nu) (m/s).
+    pub fn newtonian_peak(&self) -> f64 {
+        self.force_m_s2 * self.gap_m * self.gap_m / (8.0 * self.nu0_m2_s)
+    }
+
+    /// The particle spacing (m).
+    pub fn spacing(&self) -> f64 {
+        self.gap_m / self.across as f64
+    }
+
+    /// The scene: plates of boundary particles at y = 0 and y = L, 6 spacings (3 h) of fluid
+    /// along the periodic x and z, fluid at rest, F as gravity along x.
+    pub fn scene(&self, end_time_s: f64) -> Scene {
+        let s = self.spacing();
+        let (l, w) = (self.gap_m, 6.0 * s);
+        let operator = match self.operator {
+            ViscosityOperator::Stress => "stress",
+            ViscosityOperator::Laplacian => "laplacian",
+        };
+        let cross = self
+            .cross
+            .map(|c| format!("nu_inf_m2_s = {:e}\ncross_k_s = {:e}\ncross_n = {:e}\n", c.nu_inf_m2_s, c.k_s, c.n))
+            .unwrap_or_default();
+        let text = format!(
+            r#"
+name = "poiseuille"
+[material]
+rest_density_kg_m3 = 1000.0
+sound_speed_m_s = {c:e}
+particle_spacing_m = {s:e}
+support_radius_factor = 2.0
+gravity_m_s2 = [{f:e}, 0.0, 0.0]
+[material.viscosity]
+operator = "{operator}"
+nu0_m2_s = {nu0:e}
+{cross}
+[domain]
+min_m = [0.0, {ylo:e}, 0.0]
+max_m = [{w:e}, {yhi:e}, {w:e}]
+periodic = [true, false, true]
+[simulation]
+end_time_s = {end_time_s:e}
+precision = "f64"
+time_step = {{ safety_factor = {sf:e} }}
+[[boundary]]
+shape = "box"
+min_m = [0.0, 0.0, 0.0]
+max_m = [{w:e}, {l:e}, {w:e}]
+[[fluid_block]]
+min_m = [0.0, 0.0, 0.0]
+max_m = [{w:e}, {l:e}, {w:e}]
+"#,
+            c = self.sound_speed_m_s,
+            f = self.force_m_s2,
+            nu0 = self.nu0_m2_s,
+            ylo = -4.0 * s,
+            yhi = l + 4.0 * s,
+            sf = self.safety_factor,
+        );
+        Scene::parse(&text, "poiseuille (generated)").expect("the generated channel is a valid scene")
+    }
+}
+
+/// Morris et al. 1997, Eq. (20): the start-up velocity u(y, t) (m/s) of a Newtonian fluid at
+/// rest at t = 0, summed until the terms fall below 1e-16 of the peak.
+pub fn startup_velocity(channel: &Channel, y: f64, t: f64) -> f64 {
+    let (f, l, nu) = (channel.force_m_s2, channel.gap_m, channel.nu0_m2_s);
+    let mut u = f / (2.0 * nu) * y * (l - y);
+    for n in 0.. {
+        let k = (2 * n + 1) as f64;
+        let amplitude = 4.0 * f * l * l / (nu * PI.powi(3) * k.powi(3));
+        let term = amplitude * (k * PI * y / l).sin() * (-(k * k) * PI * PI * nu * t / (l * l)).exp();
+        u -= term;
+        if amplitude < 1e-16 * channel.newtonian_peak() {
+            break;
+        }
+    }
+    u
+}
+
+/// The steady profile of a Cross fluid: the shear stress at distance d from the mid-plane is
+/// rho F d exactly, so nu(g) g = F d gives the local shear rate g (unique while nu(g) g
+/// increases, which n <= 1 ensures), and u is its integral from the wall. Returns u at `ys`
+/// (m/s), by the midpoint rule on 4000 intervals per half gap.
+pub fn cross_steady_velocity(channel: &Channel, law: &CrossLaw, ys: &[f64]) -> Vec<f64> {
+    let (f, l, nu0) = (channel.force_m_s2, channel.gap_m, channel.nu0_m2_s);
+    let shear_rate = |d: f64| {
+        let target = f * d;
+        // nu(g) g lies between nu_inf g and nu0 g, which brackets g.
+        let (mut lo, mut hi) = (target / nu0, target / law.nu_inf_m2_s);
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if law.viscosity(nu0, mid) * mid < target {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
+    };
+    let intervals = 4000;
+    let dy = 0.5 * l / intervals as f64;
+    // u at the ends of each interval from the lower wall to the mid-plane.
+    let mut u = vec![0.0; intervals + 1];
+    for k in 0..intervals {
+        let y_mid = (k as f64 + 0.5) * dy;
+        u[k + 1] = u[k] + shear_rate(0.5 * l - y_mid) * dy;
+    }
+    ys.iter()
+        .map(|&y| {
+            let from_wall = y.min(l - y).clamp(0.0, 0.5 * l);
+            let x = from_wall / dy;
+            let k = (x.floor() as usize).min(intervals - 1);
+            u[k] + (x - k as f64) * (u[k + 1] - u[k])
+        })
+        .collect()
+}
+
+/// Fluid particles' (y (m), u_x (m/s)) at each requested time.
+pub type Profiles = Vec<Vec<[f64; 2]>>;
+
+/// Runs the channel and samples the fluid's (y, u_x) at each of `times` (s, increasing),
+/// stepping exactly onto them. Errors name the instability.
+pub fn simulate(channel: &Channel, precision_f32: bool, times: &[f64]) -> Result<Profiles, String> {
+    let end = *times.last().expect("at least one time");
+    let scene = channel.scene(end);
+    let initial = initial_particles(&scene, "poiseuille").map_err(|e| e.to_string())?;
+    let run = Sample { scene: &scene, initial: &initial, times };
+    if precision_f32 {
+        with_model::<f32, _>(&scene, run)
+    } else {
+        with_model::<f64, _>(&scene, run)
+    }
+}
+
+struct Sample<'a> {
+    scene: &'a Scene,
+    initial: &'a crate::setup::InitialParticles,
+    times: &'a [f64],
+}
+
+impl WithModel for Sample<'_> {
+    type Output = Result<Profiles, String>;
+    fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
+        let mut sim = Simulation::<R, M>::new(self.scene, self.initial, model);
+        let mut out = Vec::new();
+        for &t in self.times {
+            while sim.time < t * (1.0 - 1e-12) {
+                let (dt, limit) = sim.next_dt();
+                sim.step_with(dt.min(t - sim.time), limit).map_err(|e| e.to_string())?;
+            }
+            let p = &sim.particles;
+            out.push(
+                (0..p.len())
+                    .filter(|&i| !sim.fluid.is_boundary(p.id[i]))
+                    .map(|i| [p.position[1][i], p.velocity[0][i].to_f64()])
+                    .collect(),
+            );
+        }
+        Ok(out)
+    }
+}
+
+/// Largest |u - reference(y)| over the particles of `profile`, over `scale` (m/s).
+pub fn relative_max_error(profile: &[[f64; 2]], reference: impl Fn(f64) -> f64, scale: f64) -> f64 {
+    profile.iter().map(|&[y, u]| (u - reference(y)).abs()).fold(0.0, f64::max) / scale
+}
