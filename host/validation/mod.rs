@@ -38,8 +38,11 @@ fn operator_name(op: ViscosityOperator) -> &'static str {
     }
 }
 
+/// One sampled time: its label, the simulated (y, u) points and the reference curve.
+type ProfileSample = (String, Vec<[f64; 2]>, Vec<[f64; 2]>);
+
 /// Simulated points and reference curves of each sampled time, u over `scale` against y / L.
-fn profile_chart(title: String, gap: f64, scale: f64, samples: &[(String, Vec<[f64; 2]>, Vec<[f64; 2]>)]) -> Chart {
+fn profile_chart(title: String, gap: f64, scale: f64, samples: &[ProfileSample]) -> Chart {
     let mut series = Vec::new();
     for (k, (label, simulated, reference)) in samples.iter().enumerate() {
         let c = PALETTE[k % PALETTE.len()];
