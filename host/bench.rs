@@ -77,7 +77,6 @@ pub struct BenchOptions {
     pub warmup: usize,
     /// Extra GPU steps with every launch timed by CUDA events.
     pub profile_steps: usize,
-    pub quiet: bool,
 }
 
 /// One kernel's share of a GPU step.
@@ -381,7 +380,6 @@ pub fn cuda_available() -> Result<(), String> {
         cpu_large_steps: 0,
         warmup: 0,
         profile_steps: 0,
-        quiet: true,
     })
     .map(drop)
 }

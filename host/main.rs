@@ -247,7 +247,6 @@ fn main() -> ExitCode {
                     cpu_large_steps,
                     warmup,
                     profile_steps,
-                    quiet: false,
                 })
             });
             match options.and_then(|o| bench_command(&o, &out)) {
