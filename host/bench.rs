@@ -107,8 +107,6 @@ pub struct Measurement {
     pub kernels: Vec<KernelShare>,
     /// On the GPU: the step's compulsory memory traffic over the measured copy bandwidth (ms).
     pub memory_floor_ms: Option<f64>,
-    /// On the GPU: device-to-device copy bandwidth (bytes/s), read and write counted.
-    pub copy_bandwidth: Option<f64>,
 }
 
 impl Measurement {
@@ -160,6 +158,9 @@ struct Measure<'a> {
     steps: usize,
     options: &'a BenchOptions,
     gpu: Option<Device>,
+    /// The device's copy bandwidth (bytes/s), for the memory floor.
+    #[cfg(feature = "cuda")]
+    bandwidth: Option<f64>,
 }
 
 #[cfg(feature = "cuda")]
@@ -185,7 +186,6 @@ impl WithModel for Measure<'_> {
             bytes_per_fluid_particle: sim.memory_bytes() as f64 / sim.fluid_count() as f64,
             kernels: Vec::new(),
             memory_floor_ms: None,
-            copy_bandwidth: None,
         };
         match self.gpu {
             None => {
@@ -208,7 +208,7 @@ impl WithModel for Measure<'_> {
                 (result, None)
             }
             #[cfg(feature = "cuda")]
-            Some(gpu) => gpu_measurement(sim, gpu, blank, self.options),
+            Some(gpu) => gpu_measurement(sim, gpu, blank, self.options, self.bandwidth),
             #[cfg(not(feature = "cuda"))]
             Some(d) => match d {},
         }
@@ -221,6 +221,7 @@ fn gpu_measurement<R: Real, M: Model<R>>(
     gpu: crate::cuda::Gpu,
     blank: Measurement,
     options: &BenchOptions,
+    bandwidth: Option<f64>,
 ) -> (Result<Measurement, String>, Option<Device>) {
     use crate::cuda::GpuSimulation;
     let particles = sim.particles.len();
@@ -261,8 +262,7 @@ fn gpu_measurement<R: Real, M: Model<R>>(
                 ms_per_step: k.total_ms * per_step,
             })
             .collect();
-        let bandwidth = state.gpu().copy_bandwidth().map_err(err)?;
-        let floor = compulsory_bytes(std::mem::size_of::<R>(), M::USES_STRESS, particles as f64, cells) / bandwidth * 1e3;
+        let bytes_moved = compulsory_bytes(std::mem::size_of::<R>(), M::USES_STRESS, particles as f64, cells);
         let (median_ms, p10_ms, p90_ms) = percentiles(times);
         Ok(Measurement {
             backend: BenchBackend::Cuda,
@@ -271,8 +271,7 @@ fn gpu_measurement<R: Real, M: Model<R>>(
             p90_ms,
             bytes_per_fluid_particle: bytes / blank.fluid as f64,
             kernels,
-            memory_floor_ms: Some(floor),
-            copy_bandwidth: Some(bandwidth),
+            memory_floor_ms: bandwidth.map(|b| bytes_moved / b * 1e3),
             ..blank
         })
     })();
@@ -314,8 +313,8 @@ fn describe_cpu() -> String {
 pub fn bench(options: &BenchOptions, mut progress: impl FnMut(&Measurement)) -> Result<BenchReport, String> {
     let mut gpu = open_gpu(options)?;
     let gpu_name = describe_gpu(&gpu);
+    let gpu_bandwidth = copy_bandwidth(&gpu)?;
     let mut measurements = Vec::new();
-    let mut bandwidth = None;
     for &size in &options.sizes {
         let scene = dam_break(size.per_edge);
         let initial = initial_particles(&scene, DAM_BREAK_FILE).map_err(|e| e.to_string())?;
@@ -326,7 +325,17 @@ pub fn bench(options: &BenchOptions, mut progress: impl FnMut(&Measurement)) -> 
                     _ => options.steps,
                 };
                 let device = if backend == BenchBackend::Cuda { gpu.take() } else { None };
-                let work = Measure { scene: &scene, initial: &initial, size, precision, steps, options, gpu: device };
+                let work = Measure {
+                    scene: &scene,
+                    initial: &initial,
+                    size,
+                    precision,
+                    steps,
+                    options,
+                    gpu: device,
+                    #[cfg(feature = "cuda")]
+                    bandwidth: gpu_bandwidth,
+                };
                 let (result, returned) = match precision {
                     Precision::F32 => with_model::<f32, _>(&scene, work),
                     Precision::F64 => with_model::<f64, _>(&scene, work),
@@ -335,13 +344,12 @@ pub fn bench(options: &BenchOptions, mut progress: impl FnMut(&Measurement)) -> 
                     gpu = returned;
                 }
                 let m = result.map_err(|e| format!("{} {} {}: {e}", size.label, precision_name(precision), backend.name()))?;
-                bandwidth = bandwidth.or(m.copy_bandwidth);
                 progress(&m);
                 measurements.push(m);
             }
         }
     }
-    Ok(BenchReport { cpu: describe_cpu(), gpu: gpu_name, gpu_bandwidth: bandwidth, measurements })
+    Ok(BenchReport { cpu: describe_cpu(), gpu: gpu_name, gpu_bandwidth, measurements })
 }
 
 pub fn precision_name(p: Precision) -> &'static str {
@@ -382,6 +390,17 @@ pub fn cuda_available() -> Result<(), String> {
         profile_steps: 0,
     })
     .map(drop)
+}
+
+/// The device's copy bandwidth (bytes/s), measured once for every configuration's floor.
+#[cfg(feature = "cuda")]
+fn copy_bandwidth(gpu: &Option<Device>) -> Result<Option<f64>, String> {
+    gpu.as_ref().map(|g| g.copy_bandwidth().map_err(|e| e.to_string())).transpose()
+}
+
+#[cfg(not(feature = "cuda"))]
+fn copy_bandwidth(gpu: &Option<Device>) -> Result<Option<f64>, String> {
+    Ok(gpu.as_ref().map(|d| match *d {}))
 }
 
 #[cfg(feature = "cuda")]

@@ -65,6 +65,20 @@ fn profile_chart(title: String, gap: f64, scale: f64, samples: &[ProfileSample])
     Chart { title, x: Axis::linear("y / L"), y: Axis::linear("u / u_max"), series }
 }
 
+/// `points + 1` heights evenly across the gap, walls included (m), for reference curves.
+fn across_gap(gap: f64, points: usize) -> Vec<f64> {
+    (0..=points).map(|k| k as f64 * gap / points as f64).collect()
+}
+
+/// Writes `chart` to `path` as a PNG and returns the path for the report.
+fn save_plot(chart: &Chart, path: &Path) -> Result<String, String> {
+    chart
+        .render(900, 640)
+        .save(path)
+        .map(|()| path.display().to_string())
+        .map_err(|e| format!("{}: cannot be written: {e}", path.display()))
+}
+
 /// The start-up Poiseuille flow against Morris et al.'s series, at `across` particles over the
 /// gap: L-infinity error over all sampled times, relative to the steady peak.
 pub fn startup_poiseuille(across: usize, op: ViscosityOperator, out: Option<&Path>) -> Result<CaseResult, String> {
@@ -77,8 +91,7 @@ pub fn startup_poiseuille(across: usize, op: ViscosityOperator, out: Option<&Pat
     let mut samples = Vec::new();
     for (&t, profile) in times.iter().zip(&profiles) {
         error = error.max(relative_max_error(profile, |y| startup_velocity(&channel, y, t), peak));
-        let reference =
-            (0..=100).map(|k| k as f64 * channel.gap_m / 100.0).map(|y| [y, startup_velocity(&channel, y, t)]).collect();
+        let reference = across_gap(channel.gap_m, 100).into_iter().map(|y| [y, startup_velocity(&channel, y, t)]).collect();
         samples.push((format!("t={t:.4}s"), profile.clone(), reference));
     }
     let case = format!("start-up Poiseuille, {}, {across} across", operator_name(op));
@@ -86,12 +99,7 @@ pub fn startup_poiseuille(across: usize, op: ViscosityOperator, out: Option<&Pat
         .map(|dir| {
             let name =
                 format!("poiseuille_{}_{across}.png", if op == ViscosityOperator::Stress { "stress" } else { "laplacian" });
-            let path = dir.join(&name);
-            profile_chart(case.clone(), channel.gap_m, peak, &samples)
-                .render(900, 640)
-                .save(&path)
-                .map(|()| path.display().to_string())
-                .map_err(|e| format!("{}: cannot be written: {e}", path.display()))
+            save_plot(&profile_chart(case.clone(), channel.gap_m, peak, &samples), &dir.join(name))
         })
         .transpose()?;
     Ok(CaseResult {
@@ -124,13 +132,9 @@ pub fn cross_poiseuille(across: usize, k_s: f64, n: f64, out: Option<&Path>) -> 
     let plot = out
         .map(|dir| {
             let path = dir.join(format!("cross_poiseuille_k{k_s}_n{n}_{across}.png"));
-            let curve_y: Vec<f64> = (0..=100).map(|k| k as f64 * channel.gap_m / 100.0).collect();
+            let curve_y = across_gap(channel.gap_m, 100);
             let curve = curve_y.iter().zip(cross_steady_velocity(&channel, &law, &curve_y)).map(|(&y, u)| [y, u]).collect();
-            profile_chart(case.clone(), channel.gap_m, centre, &[("steady".into(), profile.clone(), curve)])
-                .render(900, 640)
-                .save(&path)
-                .map(|()| path.display().to_string())
-                .map_err(|e| format!("{}: cannot be written: {e}", path.display()))
+            save_plot(&profile_chart(case.clone(), channel.gap_m, centre, &[("steady".into(), profile.clone(), curve)]), &path)
         })
         .transpose()?;
     Ok(CaseResult {
