@@ -133,6 +133,9 @@ enum Command {
         /// Coarser resolutions only (seconds instead of minutes).
         #[arg(long)]
         quick: bool,
+        /// Run only these groups of cases (comma-separated): poiseuille, cross, tank.
+        #[arg(long, value_delimiter = ',')]
+        only: Vec<ValidationGroup>,
         /// Output folder for plots and validate.md.
         #[arg(long, default_value = "out/validate")]
         out: PathBuf,
@@ -207,7 +210,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Scenes { dir } => list_scenes(&dir),
-        Command::Validate { quick, out } => match validate_command(quick, &out) {
+        Command::Validate { quick, only, out } => match validate_command(quick, &only, &out) {
             Ok(true) => ExitCode::SUCCESS,
             Ok(false) => ExitCode::from(1),
             Err(e) => {
@@ -372,31 +375,51 @@ fn bench_command(options: &BenchOptions, out: &Path) -> Result<(), String> {
     Ok(())
 }
 
-/// `coil validate`: runs the cases, prints and writes the table; true when all pass.
-fn validate_command(quick: bool, out: &Path) -> Result<bool, String> {
+/// A group of `coil validate`'s cases.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum ValidationGroup {
+    /// Start-up Poiseuille flow (Morris et al. 1997), both operators.
+    Poiseuille,
+    /// Steady Poiseuille flow of Cross fluids.
+    Cross,
+    /// The hydrostatic tank.
+    Tank,
+}
+
+/// `coil validate`: runs the cases (those of `only`, or all), prints and writes the table; true
+/// when all pass.
+fn validate_command(quick: bool, only: &[ValidationGroup], out: &Path) -> Result<bool, String> {
     use coil::scene::ViscosityOperator;
-    use coil::validation::{cross_poiseuille, startup_poiseuille, CaseResult};
+    use coil::validation::{cross_poiseuille, hydrostatic_tank, startup_poiseuille, CaseResult};
     std::fs::create_dir_all(out).map_err(|e| format!("--out: {} cannot be created: {e}", out.display()))?;
     let resolutions: &[usize] = if quick { &[10, 20] } else { &[10, 20, 30] };
     let cross_across = if quick { 10 } else { 20 };
-    type Case<'a> = Box<dyn Fn() -> Result<CaseResult, String> + 'a>;
-    let mut cases: Vec<Case> = Vec::new();
+    type Case<'a> = Box<dyn Fn() -> Result<Vec<CaseResult>, String> + 'a>;
+    let mut cases: Vec<(ValidationGroup, Case)> = Vec::new();
     for &op in &[ViscosityOperator::Stress, ViscosityOperator::Laplacian] {
         for &across in resolutions {
-            cases.push(Box::new(move || startup_poiseuille(across, op, Some(out))));
+            cases.push((
+                ValidationGroup::Poiseuille,
+                Box::new(move || startup_poiseuille(across, op, Some(out)).map(|r| vec![r])),
+            ));
         }
     }
     for (k, n) in [(10.0, 1.0), (10.0, 0.5), (100.0, 0.5)] {
-        cases.push(Box::new(move || cross_poiseuille(cross_across, k, n, Some(out))));
+        cases.push((ValidationGroup::Cross, Box::new(move || cross_poiseuille(cross_across, k, n, Some(out)).map(|r| vec![r]))));
     }
+    let tank_layers = if quick { 10 } else { 20 };
+    cases.push((ValidationGroup::Tank, Box::new(move || hydrostatic_tank(tank_layers, Some(out)))));
+    cases.retain(|(group, _)| only.is_empty() || only.contains(group));
     let mut table = String::from("| case | error | tolerance | result | wall s | measured as |\n|---|---:|---:|---|---:|---|\n");
     let mut all = true;
-    for case in cases {
-        let r = case()?;
-        let verdict = if r.passed() { "pass" } else { "FAIL" };
-        all &= r.passed();
-        println!("{:<70} error {:>7.4}  tolerance {:.4}  {verdict}  ({:.0} s)", r.case, r.error, r.tolerance, r.wall_s);
-        table += &format!("| {} | {:.4} | {:.4} | {verdict} | {:.0} | {} |\n", r.case, r.error, r.tolerance, r.wall_s, r.measure);
+    for (_, case) in cases {
+        for r in case()? {
+            let verdict = if r.passed() { "pass" } else { "FAIL" };
+            all &= r.passed();
+            println!("{:<70} error {:>7.4}  tolerance {:.4}  {verdict}  ({:.0} s)", r.case, r.error, r.tolerance, r.wall_s);
+            table +=
+                &format!("| {} | {:.4} | {:.4} | {verdict} | {:.0} | {} |\n", r.case, r.error, r.tolerance, r.wall_s, r.measure);
+        }
     }
     let path = out.join("validate.md");
     write_atomically(&path, format!("# coil validate\n\n{table}").as_bytes())

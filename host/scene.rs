@@ -77,6 +77,9 @@ pub struct Material {
     /// deficit: negligible at the paper's c, violent when c is raised for accuracy.
     #[serde(default)]
     pub clamp_negative_pressure: bool,
+    /// How the pressure force weighs a pair's pressures.
+    #[serde(default)]
+    pub pressure_gradient: PressureGradient,
     /// Initial particle spacing (m).
     pub particle_spacing_m: f64,
     /// Support radius h as a multiple of the spacing (2 gives about 33 neighbors).
@@ -99,6 +102,29 @@ fn default_support_factor() -> f64 {
 }
 fn default_gravity() -> [f64; 3] {
     [0.0, -9.8, 0.0]
+}
+
+/// How the pressure force, Eq. (7), weighs the pressures of a pair.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum PressureGradient {
+    /// Eq. (7) as printed: Müller 2003's mean (p_i + p_j) / 2, which is half the gradient of a
+    /// linear pressure field. Fluid at rest then compresses twice as much as Eq. (6) says (as
+    /// if c were c / sqrt(2)), and its pressure reads twice rho0 g depth.
+    #[default]
+    Paper,
+    /// The sum p_i + p_j: the full gradient, so hydrostatic pressure is rho0 g depth.
+    Full,
+}
+
+impl PressureGradient {
+    /// The weight of p_i + p_j in the pressure force.
+    pub fn pair_weight(self) -> f64 {
+        match self {
+            PressureGradient::Paper => 0.5,
+            PressureGradient::Full => 1.0,
+        }
+    }
 }
 
 /// Which discretisation of the viscous term.
@@ -183,6 +209,25 @@ pub struct Simulation {
     pub max_fluid_particles: Option<usize>,
     #[serde(default)]
     pub time_step: TimeStep,
+    /// What wall particles show the fluid.
+    #[serde(default)]
+    pub walls: Walls,
+}
+
+/// The velocity and pressure that wall particles carry into the fluid's sums.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Walls {
+    /// The paper's Sec. III-B: at rest, with density from Eq. (5). The fluid slips over the
+    /// first half spacing, as if the wall stood half a spacing further back, and the fluid on a
+    /// floor compresses more than its weight requires.
+    #[default]
+    Paper,
+    /// The flow mirrored through the wall surface (fixed ghost particles, Marrone et al. 2011):
+    /// minus the fluid's velocity at each wall particle's mirror image, so no slip on the wall
+    /// itself, and the pressure there plus the hydrostatic difference (Adami et al. 2012). One
+    /// more pass over the particles per step and 24 bytes per wall particle.
+    Mirrored,
 }
 
 /// dt: automatic from Eq. (10) and the velocity CFL, or fixed.

@@ -6,17 +6,17 @@ use crate::model::{CpuPasses, Model, ParticleState};
 use crate::neighbor_grid::NeighborGrid;
 use crate::parallel::launch;
 use crate::particles::{stress_view_mut, vec3_view, vec3_view_mut, view_mut, Particles};
-use crate::scene::Scene;
-use crate::setup::{calibrated_mass, InitialParticles};
+use crate::scene::{Scene, Walls};
+use crate::setup::{calibrated_kernels, calibrated_mass, InitialParticles};
 use crate::time_step::{Limit, StabilityBound, TimeStepper};
 use coil_kernels::density::{density_pass, DensityArgs};
 use coil_kernels::diagnostics::{range_figures, DiagnosticsArgs, StateFigures};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::{leapfrog_pass, LeapfrogArgs};
+use coil_kernels::mirrored_wall::{mirrored_wall_pass, MirroredWallArgs};
 use coil_kernels::nozzle::{nozzle_pass, NozzleArgs, NozzleTube};
-use coil_kernels::smoothing::SmoothingKernels;
 use coil_kernels::topology::{Open, Periodic, Topology};
-use coil_kernels::view::View;
+use coil_kernels::view::{Vec3View, View};
 use coil_kernels::{Real, Vec3};
 use rayon::prelude::*;
 use std::fmt;
@@ -88,6 +88,9 @@ pub struct Simulation<R: Real, M: Model<R>> {
     pub runaway_speed: f64,
     pub last_dt: f64,
     pub last_limit: Limit,
+    /// Each wall particle's mirror image (m), x, y, z by id, when walls mirror the fluid
+    /// (`Walls::Mirrored`); not allocated otherwise.
+    pub wall_mirror: Option<[Vec<f64>; 3]>,
 }
 
 impl<R: Real, M: Model<R>> Simulation<R, M> {
@@ -113,8 +116,9 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             rest_density: R::from_f64(mat.rest_density_kg_m3),
             sound_speed2: R::from_f64(mat.sound_speed_m_s * mat.sound_speed_m_s),
             pressure_floor: R::from_f64(if mat.clamp_negative_pressure { 0.0 } else { f64::NEG_INFINITY }),
+            pressure_pair_weight: R::from_f64(mat.pressure_gradient.pair_weight()),
             gravity: Vec3::new(R::from_f64(g[0]), R::from_f64(g[1]), R::from_f64(g[2])),
-            kernels: SmoothingKernels::new(h),
+            kernels: calibrated_kernels(mat.rest_density_kg_m3, s, h),
             boundary_count: boundary_count as u32,
         };
         let ts = &scene.simulation.time_step;
@@ -150,6 +154,8 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             runaway_speed,
             last_dt: 0.0,
             last_limit: Limit::Acoustic,
+            wall_mirror: (scene.simulation.walls == Walls::Mirrored)
+                .then(|| [0, 1, 2].map(|a| initial.boundary_mirror.iter().map(|m| m[a]).collect())),
         };
         sim.sort_and_density();
         sim.diagnostics.max_speed = jet.max(initial_speed);
@@ -167,7 +173,8 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
 
     /// Bytes of particle and grid memory the run allocated.
     pub fn memory_bytes(&self) -> usize {
-        self.particles.capacity() * self.particles.bytes_per_particle() + self.grid.bytes()
+        let mirror = self.wall_mirror.as_ref().map_or(0, |m| 3 * m[0].len() * std::mem::size_of::<f64>());
+        self.particles.capacity() * self.particles.bytes_per_particle() + self.grid.bytes() + mirror
     }
 
     /// The neighbor grid of the particles' current order (valid after a step), with the
@@ -243,12 +250,23 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         launch(n, |i| density_pass(i, &args));
     }
 
-    /// Algorithm 1, lines 9-19, after the density: stress, accelerations, nozzles and
-    /// leap-frog, with the neighbor loops of topology `T`.
+    /// Algorithm 1, lines 9-19, after the density: mirrored walls (when asked), stress,
+    /// accelerations, nozzles and leap-frog, with the neighbor loops of topology `T`.
     fn forces_and_motion<T: Topology>(&mut self, topology: T, dt: f64) {
         let kick_dt = self.kick_dt(dt);
         let p = &mut self.particles;
         let n = p.len();
+        if let Some(mirror) = &self.wall_mirror {
+            let args = MirroredWallArgs {
+                neighborhood: self.grid.neighborhood(vec3_view(&p.position, n), topology),
+                fluid: self.fluid,
+                id: View::new(&p.id[..n]),
+                mirror: Vec3View::new(&mirror[0], &mirror[1], &mirror[2]),
+                velocity: vec3_view_mut(&mut p.velocity, n),
+                density: view_mut(&mut p.density, n),
+            };
+            launch(n, |i| mirrored_wall_pass(i, &args));
+        }
         // Lines 9-16: velocity gradient and stress, accelerations.
         let state = ParticleState {
             neighborhood: self.grid.neighborhood(vec3_view(&p.position, n), topology),

@@ -109,6 +109,7 @@ fn fluid<R: Real>() -> Fluid<R> {
         rest_density: R::from_f64(1000.0),
         sound_speed2: R::ONE,
         pressure_floor: R::from_f64(f64::NEG_INFINITY),
+        pressure_pair_weight: R::from_f64(0.5),
         gravity: Vec3::zero(),
         kernels: SmoothingKernels::new(0.01),
         boundary_count: 0,
@@ -239,4 +240,76 @@ fn periodic_wrap_moves_a_particle_by_one_period_and_only_along_periodic_axes() {
     // Exactly on the upper face is the first cell of the next period, that is the lower face.
     assert_eq!(t.wrap([0.3, 0.0, 0.0])[0], 0.0);
     assert_eq!(Open.wrap([9.0, -9.0, 1.0]), [9.0, -9.0, 1.0]);
+}
+
+/// Jittered fluid above y = 0 (wall particles below it), carrying a linear velocity field and
+/// a linear pressure field, sampled near and far from the wall.
+#[test]
+fn the_mirrored_wall_fit_reproduces_linear_fields_next_to_a_wall() {
+    use coil::neighbor_grid::NeighborGrid;
+    use coil::particles::Particles;
+    use coil_kernels::mirrored_wall::fluid_at;
+    use coil_kernels::view::ViewMut;
+    let (s, h) = (0.01, 0.02);
+    let (min, max) = ([0.0, -0.03, 0.0], [0.1, 0.1, 0.1]);
+    let velocity_at = |x: [f64; 3]| [0.3 + 2.0 * x[1] - x[2], -0.1 + 0.5 * x[0], 4.0 * x[1]];
+    let pressure_at = |x: [f64; 3]| 50.0 - 300.0 * x[1] + 20.0 * x[0];
+    let mut p = Particles::<f64>::with_capacity(20_000, false);
+    let mut state = 11u64;
+    let mut boundary_count = 0;
+    for pass in 0..2 {
+        for k in 0..10 {
+            for j in -3..10 {
+                for i in 0..10 {
+                    let wall = j < 0;
+                    if wall != (pass == 0) {
+                        continue;
+                    }
+                    let jitter = |state: &mut u64| if wall { 0.0 } else { 0.3 * s * (uniform(state) - 0.5) };
+                    let x = [
+                        (i as f64 + 0.5) * s + jitter(&mut state),
+                        (j as f64 + 0.5) * s + jitter(&mut state),
+                        (k as f64 + 0.5) * s + jitter(&mut state),
+                    ];
+                    let id = p.len() as u32;
+                    p.push(id, x, if wall { [9.0; 3] } else { velocity_at(x) });
+                    boundary_count += wall as u32;
+                }
+            }
+        }
+    }
+    let mut grid = NeighborGrid::new(min, max, h, [false; 3], p.capacity());
+    grid.sort(&mut p);
+    let fluid = Fluid { boundary_count, kernels: SmoothingKernels::new(h), ..fluid::<f64>() };
+    let n = p.len();
+    for i in 0..n {
+        let x = [0, 1, 2].map(|a| p.position[a][i]);
+        // Wall particles carry a pressure far off the field: the fit must ignore them.
+        let pressure = if p.id[i] < boundary_count { 1e6 } else { pressure_at(x) };
+        p.density[i] = fluid.rest_density + pressure / fluid.sound_speed2;
+    }
+    let (id, nb) = (p.id.clone(), grid.neighborhood(coil::particles::vec3_view(&p.position, n), Open));
+    let velocity = coil::particles::vec3_view_mut(&mut p.velocity, n);
+    let density = ViewMut::new(&mut p.density);
+    for x in [[0.05, 0.005, 0.05], [0.043, 0.015, 0.061], [0.05, 0.045, 0.05], [0.031, 0.0001, 0.052]] {
+        let sample = fluid_at(x, &nb, &View::new(&id), &velocity, &density, &fluid);
+        let (v, pr) = (velocity_at(x), pressure_at(x));
+        assert!((sample.velocity - Vec3::new(v[0], v[1], v[2])).norm() < 1e-9, "at {x:?}: {:?} against {v:?}", sample.velocity);
+        assert!((sample.pressure - pr).abs() < 1e-7 * pr.abs(), "at {x:?}: {} against {pr}", sample.pressure);
+    }
+    // Outside the fluid's reach there is nothing to mirror: rest, zero pressure.
+    let far = fluid_at([0.05, -0.029, 0.05], &nb, &View::new(&id), &velocity, &density, &fluid);
+    assert_eq!((far.velocity, far.pressure), (Vec3::zero(), 0.0));
+}
+
+#[test]
+fn a_symmetric_solve_inverts_and_refuses_a_flat_tensor() {
+    use coil_kernels::vec3::SymTensor;
+    let t = SymTensor { xx: 4.0, yy: 3.0, zz: 2.0, xy: 1.0, xz: 0.5, yz: -0.25 };
+    let b = Vec3::new(1.0, -2.0, 0.5);
+    let x = t.solve(b).expect("positive definite");
+    assert!((t.dot(x) - b).norm() < 1e-12);
+    // Points in a plane: no spread across it.
+    let flat = SymTensor { xx: 1.0, yy: 0.0, zz: 1.0, xy: 0.0, xz: 0.2, yz: 0.0 };
+    assert_eq!(flat.solve(b), None);
 }

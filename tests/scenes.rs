@@ -1,5 +1,7 @@
 //! Every shipped scene loads, validates and runs a few steps; bad input exits with code 2.
 
+mod common;
+
 use coil::model::StressModel;
 use coil::scene::Scene;
 use coil::setup::initial_particles;
@@ -252,4 +254,44 @@ fn backend_cuda_without_a_device_exits_2_and_auto_falls_back_to_the_cpu() {
     assert!(auto.status.success(), "{stderr}");
     assert!(stderr.contains("backend: cpu ("), "auto must say it chose the CPU and why: {stderr}");
     std::fs::remove_dir_all(&out).ok();
+}
+
+/// Each wall particle's mirror image lies inside the walls, and the midpoint of the two is the
+/// nearest point of the wall surface: a face, an edge or a corner of a box, or a plate's top.
+#[test]
+fn wall_particles_mirror_through_the_nearest_point_of_their_wall() {
+    let box_m = [0.2, 0.3, 0.16];
+    let text = common::box_scene(0.02, box_m, [0.1, 0.1, 0.1], "");
+    let p = coil::setup::initial_particles(&common::scene(&text), "test.toml").expect("valid");
+    assert_eq!(p.boundary.len(), p.boundary_mirror.len());
+    for (x, m) in p.boundary.iter().zip(&p.boundary_mirror) {
+        let surface = [0, 1, 2].map(|a| x[a].clamp(0.0, box_m[a]));
+        for a in 0..3 {
+            assert!((0.5 * (x[a] + m[a]) - surface[a]).abs() < 1e-12, "{x:?} mirrors to {m:?}");
+            assert!(m[a] > 0.0 && m[a] < box_m[a], "{x:?} mirrors to {m:?}, outside the box");
+        }
+    }
+    let plate = r#"
+name = "plate"
+[material]
+particle_spacing_m = 0.02
+[material.viscosity]
+nu0_m2_s = 0.01
+[domain]
+min_m = [0.0, -0.1, 0.0]
+max_m = [0.2, 0.3, 0.2]
+[simulation]
+end_time_s = 1.0
+[[boundary]]
+shape = "plate"
+height_m = 0.0
+min_xz_m = [0.04, 0.04]
+max_xz_m = [0.16, 0.16]
+"#;
+    let p = coil::setup::initial_particles(&common::scene(plate), "test.toml").expect("valid");
+    assert!(!p.boundary.is_empty());
+    for (x, m) in p.boundary.iter().zip(&p.boundary_mirror) {
+        assert!(x[1] < 0.0 && (m[1] + x[1]).abs() < 1e-12, "{x:?} mirrors to {m:?}");
+        assert!((m[0] - x[0]).abs() < 1e-12 && (m[2] - x[2]).abs() < 1e-12, "{x:?} mirrors to {m:?}");
+    }
 }

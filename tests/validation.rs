@@ -1,9 +1,10 @@
 //! Validation against published references at quick sizes; `coil validate` runs the full set
 //! and reports each error against its tolerance.
 
-use coil::scene::ViscosityOperator;
-use coil::validation::poiseuille::{cross_steady_velocity, startup_velocity, Channel, CrossLaw};
-use coil::validation::startup_poiseuille;
+use coil::scene::{PressureGradient, ViscosityOperator, Walls};
+use coil::validation::hydrostatic::{self, Tank};
+use coil::validation::poiseuille::{cross_steady_velocity, relative_max_error, simulate, startup_velocity, Channel, CrossLaw};
+use coil::validation::{startup_poiseuille, MORRIS_TIMES};
 
 #[test]
 fn the_startup_series_starts_at_rest_and_ends_at_the_parabola() {
@@ -34,14 +35,45 @@ fn the_cross_reference_is_the_parabola_when_the_fluid_is_newtonian_and_faster_wh
     assert!(centre > ch.newtonian_peak() && centre < 4.0 * ch.newtonian_peak(), "{centre}");
 }
 
-/// Zero-velocity wall particles put the no-slip plane about half a spacing outside the wall
-/// (measured: see README "Validation"), an error of order spacing / gap: so the error must
-/// roughly halve when the resolution doubles, and stay below what was measured with margin.
+/// Mirrored walls put the no-slip plane on the wall surface, and the calibrated kernels make
+/// the Laplacian exact on the lattice: what is left is the discretisation error, which must
+/// meet the 3 % already at 20 across and fall with resolution (measured: 0.011 at 10,
+/// 0.0033 at 20).
 #[test]
 fn startup_poiseuille_converges_with_resolution_laplacian() {
     let coarse = startup_poiseuille(10, ViscosityOperator::Laplacian, None).expect("stable");
     let fine = startup_poiseuille(20, ViscosityOperator::Laplacian, None).expect("stable");
     eprintln!("Laplacian operator: {:.4} at 10 across, {:.4} at 20 across", coarse.error, fine.error);
-    assert!(fine.error < 0.7 * coarse.error, "{} then {}", coarse.error, fine.error);
-    assert!(fine.error < 0.16, "{}", fine.error);
+    assert!(fine.error < 0.5 * coarse.error, "{} then {}", coarse.error, fine.error);
+    assert!(fine.passed(), "{} above {}", fine.error, fine.tolerance);
+}
+
+/// With the paper's walls (at rest) the channel flows as if one spacing wider: the error at 10
+/// across is then some 20 times the mirrored walls' (measured: 0.23 against 0.011).
+#[test]
+fn paper_walls_slip_where_mirrored_walls_do_not() {
+    let mirrored = Channel::morris(10, ViscosityOperator::Laplacian);
+    let paper = Channel { walls: Walls::Paper, ..mirrored };
+    let error = |ch: &Channel| {
+        let t = MORRIS_TIMES[4] * ch.gap_m * ch.gap_m / ch.nu0_m2_s;
+        let profile = simulate(ch, &[t]).expect("stable").remove(0);
+        relative_max_error(&profile, |y| startup_velocity(ch, y, t), ch.newtonian_peak())
+    };
+    let (m, p) = (error(&mirrored), error(&paper));
+    eprintln!("steady error at 10 across: mirrored walls {m:.4}, paper's walls {p:.4}");
+    assert!(m < 0.03 && p > 5.0 * m, "mirrored {m}, paper's {p}");
+}
+
+/// The tank, 10 layers deep: with the full pressure gradient the layer pressures are rho0 g
+/// depth within the case's 5 % (measured 0.017) and the fluid is at rest; Eq. (7) as printed
+/// weighs the pair pressures by 1/2, so the same tank settles at twice the pressure.
+#[test]
+fn the_hydrostatic_tank_holds_rho0_g_depth_and_eq7_doubles_it() {
+    let full = hydrostatic::simulate(&Tank::new(10, PressureGradient::Full)).expect("stable");
+    eprintln!("full gradient: pressure error {:.4}, residual speed {:.5}", full.pressure_error, full.residual_speed);
+    assert!(full.pressure_error < 0.05 && full.residual_speed < 0.01, "{full:?}");
+    let paper = hydrostatic::simulate(&Tank::new(10, PressureGradient::Paper)).expect("stable");
+    eprintln!("Eq. (7): pressure over rho0 g depth {:.3}", paper.pressure_ratio);
+    assert!((paper.pressure_ratio - 2.0).abs() < 0.1, "{}", paper.pressure_ratio);
+    assert!((full.pressure_ratio - 1.0).abs() < 0.05, "{}", full.pressure_ratio);
 }

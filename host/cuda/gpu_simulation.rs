@@ -19,6 +19,7 @@ use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::density::DensityArgs;
 use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
 use coil_kernels::leapfrog::LeapfrogArgs;
+use coil_kernels::mirrored_wall::MirroredWallArgs;
 use coil_kernels::nozzle::NozzleArgs;
 use coil_kernels::topology::{Open, Topology};
 use coil_kernels::velocity_gradient::StressArgs;
@@ -80,6 +81,8 @@ struct DeviceState<R> {
     staged_id: DeviceArray<u32>,
     /// One `StateFigures` per diagnostics range.
     figures: DeviceArray<StateFigures>,
+    /// Wall particles' mirror images by id, under mirrored walls.
+    wall_mirror: Option<DeviceVec3<f64>>,
 }
 
 impl<R: Real> DeviceState<R> {
@@ -117,6 +120,7 @@ impl<R: Real> DeviceState<R> {
             staged_velocity: vec3_zeros(gpu, staged, "inlet layers")?,
             staged_id: DeviceArray::zeros(gpu, staged, "inlet layers")?,
             figures: DeviceArray::zeros(gpu, capacity.div_ceil(DIAGNOSTICS_RANGE), "diagnostics")?,
+            wall_mirror: None,
         })
     }
 
@@ -142,6 +146,7 @@ impl<R: Real> DeviceState<R> {
             + r3(&self.staged_velocity)
             + self.staged_id.bytes()
             + self.figures.bytes()
+            + self.wall_mirror.as_ref().map_or(0, v3)
     }
 
     fn stress_view(&self, n: usize) -> Option<SymTensorViewMut<'static, R>> {
@@ -223,7 +228,14 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         let buckets = host.grid.grid.cell_count() as usize + 1;
         // Four layers of every inlet per step is far above what dt at the Eq. (10) bound brings.
         let staged_capacity = 4 * host.inlets().iter().map(|i| i.layer_size()).sum::<usize>();
-        let device = DeviceState::new(&gpu, capacity, buckets, staged_capacity, M::USES_STRESS)?;
+        let mut device = DeviceState::new(&gpu, capacity, buckets, staged_capacity, M::USES_STRESS)?;
+        if let Some(mirror) = &host.wall_mirror {
+            let mut on_device = vec3_zeros(&gpu, mirror[0].len(), "wall mirror images")?;
+            for a in 0..3 {
+                on_device[a].upload(&gpu, &mirror[a])?;
+            }
+            device.wall_mirror = Some(on_device);
+        }
         let mut sim = Self {
             bound: host.particles.len(),
             staged: Particles::with_capacity(staged_capacity, false),
@@ -299,6 +311,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         self.inject(dt)?;
         self.sort()?;
         self.density()?;
+        self.mirrored_walls()?;
         let n = self.bound;
         let d = &self.device;
         let state = ParticleState {
@@ -484,6 +497,26 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         let count = self.count();
         // SAFETY: density_<R>(count, args).
         unsafe { self.gpu.launch(kernel::<R>("density", "", ""), n as u32, &[&count, &ByValue(args)]) }
+    }
+
+    /// Wall particles mirror the fluid, when the scene asks (see `coil_kernels::mirrored_wall`).
+    fn mirrored_walls(&mut self) -> Result<(), CudaError> {
+        let Some(mirror) = &self.device.wall_mirror else {
+            return Ok(());
+        };
+        let n = self.bound;
+        let d = &self.device;
+        let args = MirroredWallArgs {
+            neighborhood: self.neighborhood(),
+            fluid: self.host.fluid,
+            id: d.id.view(n),
+            mirror: vec3_view(mirror, mirror[0].len()),
+            velocity: vec3_view_mut(&d.velocity, n),
+            density: d.density.view_mut(n),
+        };
+        let count = self.count();
+        // SAFETY: mirrored_wall_<R>(count, args).
+        unsafe { self.gpu.launch(kernel::<R>("mirrored_wall", "", ""), n as u32, &[&count, &ByValue(args)]) }
     }
 
     /// Fluid inside a nozzle's tube moves with the jet (see `coil_kernels::nozzle`).

@@ -1,9 +1,12 @@
 //! Validation against references nobody on the team produced: `coil validate` and its tests.
 
+pub mod hydrostatic;
 pub mod poiseuille;
+pub mod snapshot;
 
 use crate::plot::{Axis, Chart, Line, Series, PALETTE};
-use crate::scene::ViscosityOperator;
+use crate::scene::{PressureGradient, ViscosityOperator};
+use hydrostatic::Tank;
 use poiseuille::{cross_steady_velocity, relative_max_error, simulate, startup_velocity, Channel, CrossLaw};
 use std::path::Path;
 use std::time::Instant;
@@ -85,7 +88,7 @@ pub fn startup_poiseuille(across: usize, op: ViscosityOperator, out: Option<&Pat
     let channel = Channel::morris(across, op);
     let started = Instant::now();
     let times = MORRIS_TIMES.map(|t| t * channel.gap_m * channel.gap_m / channel.nu0_m2_s);
-    let profiles = simulate(&channel, false, &times)?;
+    let profiles = simulate(&channel, &times)?;
     let peak = channel.newtonian_peak();
     let mut error: f64 = 0.0;
     let mut samples = Vec::new();
@@ -123,7 +126,7 @@ pub fn cross_poiseuille(across: usize, k_s: f64, n: f64, out: Option<&Path>) -> 
     let started = Instant::now();
     // The slowest mode decays at the rate of nu_inf: 0.75 L^2 / nu_inf leaves e^-30 of it.
     let end = 0.75 * channel.gap_m * channel.gap_m / law.nu_inf_m2_s;
-    let profile = simulate(&channel, false, &[end])?.remove(0);
+    let profile = simulate(&channel, &[end])?.remove(0);
     let ys: Vec<f64> = profile.iter().map(|p| p[0]).collect();
     let reference = cross_steady_velocity(&channel, &law, &ys);
     let centre = cross_steady_velocity(&channel, &law, &[0.5 * channel.gap_m])[0];
@@ -148,4 +151,61 @@ pub fn cross_poiseuille(across: usize, k_s: f64, n: f64, out: Option<&Path>) -> 
         wall_s: started.elapsed().as_secs_f64(),
         plot,
     })
+}
+
+/// The hydrostatic tank, `layers` particles deep, with the full pressure gradient: the pressure
+/// against rho0 g depth, and the residual speed once settled.
+pub fn hydrostatic_tank(layers: usize, out: Option<&Path>) -> Result<Vec<CaseResult>, String> {
+    let tank = Tank::new(layers, PressureGradient::Full);
+    let started = Instant::now();
+    let r = hydrostatic::simulate(&tank)?;
+    let wall_s = started.elapsed().as_secs_f64();
+    let case = format!("hydrostatic tank, {layers} layers deep");
+    let plot = out
+        .map(|dir| {
+            let d = tank.depth_m;
+            let surface = r.surface_m;
+            let rho0_g = 1000.0 * 9.81;
+            let points =
+                r.snapshot.position.iter().zip(&r.snapshot.pressure).map(|(x, p)| [(surface - x[1]) / d, p / (rho0_g * d)]);
+            let chart = Chart {
+                title: case.clone(),
+                x: Axis::linear("depth / D"),
+                y: Axis::linear("p / (rho0 g D)"),
+                series: vec![
+                    Series {
+                        label: "rho0 g depth".into(),
+                        color: PALETTE[0],
+                        points: vec![[0.0, 0.0], [1.0, 1.0]],
+                        line: Line::Solid,
+                        marker: 0.0,
+                    },
+                    Series { label: "sph".into(), color: PALETTE[1], points: points.collect(), line: Line::None, marker: 2.0 },
+                ],
+            };
+            save_plot(&chart, &dir.join(format!("hydrostatic_{layers}.png")))
+        })
+        .transpose()?;
+    let c = format!("c = {:.2} m/s (g D / c^2 = 0.01)", tank.sound_speed());
+    Ok(vec![
+        CaseResult {
+            case: format!("{case}: pressure"),
+            measure: format!(
+                "max over layers deeper than h of |mean p - rho0 g depth| / (rho0 g D) after gravity is ramped up (particle scatter about the layer mean: {:.3} rms); {c}",
+                r.pressure_scatter
+            ),
+            error: r.pressure_error,
+            tolerance: 0.05,
+            wall_s,
+            plot,
+        },
+        CaseResult {
+            case: format!("{case}: at rest"),
+            measure: format!("max |v| / sqrt(g D) at the end; {c}"),
+            error: r.residual_speed,
+            tolerance: 0.01,
+            wall_s,
+            plot: None,
+        },
+    ])
 }

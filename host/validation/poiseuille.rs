@@ -3,11 +3,8 @@
 //! series solution, and the steady flow of a Cross fluid against the profile integrated from
 //! its exact shear stress.
 
-use crate::model::{with_model, Model, WithModel};
-use crate::scene::{Scene, ViscosityOperator};
-use crate::setup::initial_particles;
-use crate::simulation::Simulation;
-use coil_kernels::Real;
+use super::snapshot::snapshots;
+use crate::scene::{Precision, Scene, ViscosityOperator, Walls};
 use std::f64::consts::PI;
 
 /// Morris et al. 1997's channel: L = 1 mm, nu = 1e-6 m^2/s, F = 2e-4 m/s^2, rho0 = 1000
@@ -24,6 +21,8 @@ pub struct Channel {
     /// Particles across the gap.
     pub across: usize,
     pub operator: ViscosityOperator,
+    pub walls: Walls,
+    pub precision: Precision,
     /// c (m/s).
     pub sound_speed_m_s: f64,
     /// Multiplies the automatic dt.
@@ -55,6 +54,8 @@ impl Channel {
             cross: None,
             across,
             operator,
+            walls: Walls::Mirrored,
+            precision: Precision::F64,
             // Mach 0.01 at u_max = 2.5e-5 m/s; dt stays set by the viscous term of Eq. (10).
             sound_speed_m_s: 2.5e-3,
             safety_factor: 1.0,
@@ -80,6 +81,14 @@ impl Channel {
             ViscosityOperator::Stress => "stress",
             ViscosityOperator::Laplacian => "laplacian",
         };
+        let precision = match self.precision {
+            Precision::F32 => "f32",
+            Precision::F64 => "f64",
+        };
+        let walls = match self.walls {
+            Walls::Paper => "paper",
+            Walls::Mirrored => "mirrored",
+        };
         let cross = self
             .cross
             .map(|c| format!("nu_inf_m2_s = {:e}\ncross_k_s = {:e}\ncross_n = {:e}\n", c.nu_inf_m2_s, c.k_s, c.n))
@@ -103,7 +112,8 @@ max_m = [{w:e}, {yhi:e}, {w:e}]
 periodic = [true, false, true]
 [simulation]
 end_time_s = {end_time_s:e}
-precision = "f64"
+precision = "{precision}"
+walls = "{walls}"
 time_step = {{ safety_factor = {sf:e} }}
 [[boundary]]
 shape = "box"
@@ -182,46 +192,12 @@ pub fn cross_steady_velocity(channel: &Channel, law: &CrossLaw, ys: &[f64]) -> V
 /// Fluid particles' (y (m), u_x (m/s)) at each requested time.
 pub type Profiles = Vec<Vec<[f64; 2]>>;
 
-/// Runs the channel and samples the fluid's (y, u_x) at each of `times` (s, increasing),
-/// stepping exactly onto them. Errors name the instability.
-pub fn simulate(channel: &Channel, precision_f32: bool, times: &[f64]) -> Result<Profiles, String> {
+/// Runs the channel and samples the fluid's (y, u_x) at each of `times` (s, increasing).
+/// Errors name the instability.
+pub fn simulate(channel: &Channel, times: &[f64]) -> Result<Profiles, String> {
     let end = *times.last().expect("at least one time");
-    let scene = channel.scene(end);
-    let initial = initial_particles(&scene, "poiseuille").map_err(|e| e.to_string())?;
-    let run = Sample { scene: &scene, initial: &initial, times };
-    if precision_f32 {
-        with_model::<f32, _>(&scene, run)
-    } else {
-        with_model::<f64, _>(&scene, run)
-    }
-}
-
-struct Sample<'a> {
-    scene: &'a Scene,
-    initial: &'a crate::setup::InitialParticles,
-    times: &'a [f64],
-}
-
-impl WithModel for Sample<'_> {
-    type Output = Result<Profiles, String>;
-    fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
-        let mut sim = Simulation::<R, M>::new(self.scene, self.initial, model);
-        let mut out = Vec::new();
-        for &t in self.times {
-            while sim.time < t * (1.0 - 1e-12) {
-                let (dt, limit) = sim.next_dt();
-                sim.step_with(dt.min(t - sim.time), limit).map_err(|e| e.to_string())?;
-            }
-            let p = &sim.particles;
-            out.push(
-                (0..p.len())
-                    .filter(|&i| !sim.fluid.is_boundary(p.id[i]))
-                    .map(|i| [p.position[1][i], p.velocity[0][i].to_f64()])
-                    .collect(),
-            );
-        }
-        Ok(out)
-    }
+    let snapshots = snapshots(&channel.scene(end), times, None)?;
+    Ok(snapshots.iter().map(|s| s.position.iter().zip(&s.velocity).map(|(x, v)| [x[1], v[0]]).collect()).collect())
 }
 
 /// Largest |u - reference(y)| over the particles of `profile`, over `scale` (m/s).

@@ -80,8 +80,9 @@ impl<R: Real> ViscousOperator<R> for VelocityLaplacian<'_, R> {
 }
 
 /// Acceleration of fluid particle `i` (m/s^2): pressure, Eq. (7), as an acceleration,
-/// -(1/rho_i) sum_j m_j (p_i + p_j) / (2 rho_j) grad_i W (Müller 2003's force over rho_i), plus
-/// the viscous operator, plus gravity. Symmetric in i and j: pair forces cancel.
+/// -(1/rho_i) sum_j m_j (p_i + p_j) / (2 rho_j) grad_i W (Müller 2003's force over rho_i; the
+/// 1/2 is `fluid.pressure_pair_weight`), plus the viscous operator, plus gravity. Symmetric in
+/// i and j: pair forces cancel.
 #[inline(always)]
 pub fn acceleration<R: Real, Op: ViscousOperator<R>, T: Topology>(
     i: usize,
@@ -101,8 +102,7 @@ pub fn acceleration<R: Real, Op: ViscousOperator<R>, T: Topology>(
         pressure_sum += grad_w * ((p_i + pressure(rho_j, fluid)) / rho_j);
         viscous_sum += viscous.pair(&own, j, rho_j, r2, grad_w, &fluid.kernels);
     });
-    let half = R::from_f64(0.5);
-    pressure_sum * (-half * fluid.mass / rho_i) + viscous_sum * fluid.mass + fluid.gravity
+    pressure_sum * (-fluid.pressure_pair_weight * fluid.mass / rho_i) + viscous_sum * fluid.mass + fluid.gravity
 }
 
 /// Arguments of the acceleration pass.

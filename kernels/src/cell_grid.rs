@@ -96,17 +96,24 @@ impl<T: Topology> Neighborhood<'_, T> {
     /// periodic face x_i - x_j is the nearest image's.
     #[inline(always)]
     pub fn for_each_neighbor<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, i: usize, h2: R, f: F) {
+        self.for_each_particle_near(self.position.at(i), h2, f);
+    }
+
+    /// Calls `f(j, x - x_j, |x - x_j|^2)` for every particle j with |x - x_j| < h around a point
+    /// `x` of the domain (m), in the order of [`Self::for_each_neighbor`]; none when `x` lies
+    /// outside the domain box.
+    #[inline(always)]
+    pub fn for_each_particle_near<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, x: [f64; 3], h2: R, f: F) {
         if T::PERIODIC {
-            self.for_each_neighbor_periodic(i, h2, f);
+            self.for_each_particle_near_periodic(x, h2, f);
         } else {
-            self.for_each_neighbor_open(i, h2, f);
+            self.for_each_particle_near_open(x, h2, f);
         }
     }
 
     /// The open domain's loop: three x-adjacent cells are one contiguous run.
     #[inline(always)]
-    fn for_each_neighbor_open<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, i: usize, h2: R, mut f: F) {
-        let xi = self.position.at(i);
+    fn for_each_particle_near_open<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, xi: [f64; 3], h2: R, mut f: F) {
         let Some(c) = self.grid.cell_coords(xi) else {
             return;
         };
@@ -139,8 +146,7 @@ impl<T: Topology> Neighborhood<'_, T> {
     /// The periodic domain's loop: cells wrap along periodic axes (which hold at least 3 cells,
     /// so no cell is visited twice), and x-runs split where they cross the seam.
     #[inline(always)]
-    fn for_each_neighbor_periodic<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, i: usize, h2: R, mut f: F) {
-        let xi = self.position.at(i);
+    fn for_each_particle_near_periodic<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, xi: [f64; 3], h2: R, mut f: F) {
         let Some(c) = self.grid.cell_coords(xi) else {
             return;
         };

@@ -18,6 +18,10 @@ pub struct Fluid<R> {
     /// printed; 0 removes the tension that the density deficit of free-surface particles
     /// otherwise creates (c^2 times about 20 % of rho0), which grows with c^2.
     pub pressure_floor: R,
+    /// Weight of the pair pressure (p_i + p_j) in the pressure force: 1/2 is Eq. (7) as printed
+    /// (Müller 2003's mean), which is half the gradient of a linear pressure field, so that the
+    /// fluid compresses as if c were c / sqrt(2); 1 gives the full gradient.
+    pub pressure_pair_weight: R,
     /// Gravity g (m/s^2).
     pub gravity: Vec3<R>,
     pub kernels: SmoothingKernels<R>,

@@ -5,7 +5,8 @@
 //! the very same functions as PTX kernels (see `ptx`). Physics is written once, here.
 //!
 //! Per step: [`cell_grid::hash_pass`], the [`counting_sort`] stages and a gather of every
-//! particle field, [`density::density_pass`] (Eq. 5, 6), [`velocity_gradient::stress_pass`]
+//! particle field, [`density::density_pass`] (Eq. 5, 6), [`mirrored_wall::mirrored_wall_pass`]
+//! (when the scene asks), [`velocity_gradient::stress_pass`]
 //! (Eq. 8, 2, 3; the paper's operator only), [`acceleration::acceleration_pass`] (Eq. 7, 9 or
 //! Müller's Laplacian, gravity), [`nozzle::nozzle_pass`] (jet scenes only) and
 //! [`leapfrog::leapfrog_pass`]; then [`diagnostics`] guards the run.
@@ -25,6 +26,7 @@ pub mod density;
 pub mod diagnostics;
 pub mod fluid;
 pub mod leapfrog;
+pub mod mirrored_wall;
 pub mod nozzle;
 pub mod real;
 pub mod smoothing;

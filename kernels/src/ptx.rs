@@ -13,6 +13,7 @@ use crate::cross_viscosity::{Cross, Newtonian};
 use crate::density::{density_pass, DensityArgs};
 use crate::diagnostics::{diagnostics_pass, DiagnosticsArgs, StateFigures};
 use crate::leapfrog::{leapfrog_pass, LeapfrogArgs};
+use crate::mirrored_wall::{mirrored_wall_pass, MirroredWallArgs};
 use crate::nozzle::{nozzle_pass, NozzleArgs};
 use crate::topology::Open;
 use crate::velocity_gradient::{stress_pass, StressArgs};
@@ -47,6 +48,8 @@ macro_rules! per_index_kernel {
 per_index_kernel!(hash, HashArgs<'static>, hash_pass);
 per_index_kernel!(density_f32, DensityArgs<'static, f32>, density_pass::<f32, Open>);
 per_index_kernel!(density_f64, DensityArgs<'static, f64>, density_pass::<f64, Open>);
+per_index_kernel!(mirrored_wall_f32, MirroredWallArgs<'static, f32>, mirrored_wall_pass::<f32, Open>);
+per_index_kernel!(mirrored_wall_f64, MirroredWallArgs<'static, f64>, mirrored_wall_pass::<f64, Open>);
 per_index_kernel!(stress_newtonian_f32, StressArgs<'static, f32, Newtonian<f32>>, stress_pass::<f32, Newtonian<f32>, Open>);
 per_index_kernel!(stress_newtonian_f64, StressArgs<'static, f64, Newtonian<f64>>, stress_pass::<f64, Newtonian<f64>, Open>);
 per_index_kernel!(stress_cross_f32, StressArgs<'static, f32, Cross<f32>>, stress_pass::<f32, Cross<f32>, Open>);

@@ -30,6 +30,16 @@ impl<R: Real> SmoothingKernels<R> {
         }
     }
 
+    /// The same kernels with the spiky gradient and the viscosity Laplacian multiplied by
+    /// `gradient` and `laplacian` (dimensionless): see the host's `calibrated_kernels`.
+    pub fn corrected(self, gradient: f64, laplacian: f64) -> Self {
+        Self {
+            spiky_gradient_coefficient: self.spiky_gradient_coefficient * R::from_f64(gradient),
+            viscosity_laplacian_coefficient: self.viscosity_laplacian_coefficient * R::from_f64(laplacian),
+            ..self
+        }
+    }
+
     /// poly6: W(r) = 315 / (64 pi h^9) (h^2 - r^2)^3 for r < h (1/m^3). Used by Eq. (5).
     #[inline(always)]
     pub fn poly6(&self, r2: R) -> R {

@@ -109,6 +109,17 @@ impl<R: Real> Mat3<R> {
         self
     }
 
+    /// The product `M^T · v`.
+    #[inline(always)]
+    pub fn transpose_dot(self, v: Vec3<R>) -> Vec3<R> {
+        let m = self.m;
+        Vec3::new(
+            m[0][0] * v.x + m[1][0] * v.y + m[2][0] * v.z,
+            m[0][1] * v.x + m[1][1] * v.y + m[2][1] * v.z,
+            m[0][2] * v.x + m[1][2] * v.y + m[2][2] * v.z,
+        )
+    }
+
     /// `M + M^T`.
     #[inline(always)]
     pub fn symmetric_sum(self) -> SymTensor<R> {
@@ -178,5 +189,41 @@ impl<R: Real> SymTensor<R> {
             self.xy * v.x + self.yy * v.y + self.yz * v.z,
             self.xz * v.x + self.yz * v.y + self.zz * v.z,
         )
+    }
+
+    /// `v v^T`.
+    #[inline(always)]
+    pub fn outer(v: Vec3<R>) -> Self {
+        Self { xx: v.x * v.x, yy: v.y * v.y, zz: v.z * v.z, xy: v.x * v.y, xz: v.x * v.z, yz: v.y * v.z }
+    }
+
+    #[inline(always)]
+    pub fn trace(self) -> R {
+        self.xx + self.yy + self.zz
+    }
+
+    /// `T^-1 b` for a positive semi-definite `T`, or `None` when `T` is too close to singular:
+    /// its determinant below 1e-4 (tr T)^3, some 400 times below that of an isotropic tensor
+    /// of the same trace (whose ratio is 1/27).
+    #[inline(always)]
+    pub fn solve(self, b: Vec3<R>) -> Option<Vec3<R>> {
+        let Self { xx: a, yy: e, zz: i, xy: d, xz: g, yz: h } = self;
+        let c00 = e * i - h * h;
+        let c01 = g * h - d * i;
+        let c02 = d * h - e * g;
+        let det = a * c00 + d * c01 + g * c02;
+        let tr = self.trace();
+        if !(det > R::from_f64(1e-4) * tr * tr * tr) {
+            return None;
+        }
+        let c11 = a * i - g * g;
+        let c12 = d * g - a * h;
+        let c22 = a * e - d * d;
+        let inv = R::ONE / det;
+        Some(Vec3::new(
+            (c00 * b.x + c01 * b.y + c02 * b.z) * inv,
+            (c01 * b.x + c11 * b.y + c12 * b.z) * inv,
+            (c02 * b.x + c12 * b.y + c22 * b.z) * inv,
+        ))
     }
 }

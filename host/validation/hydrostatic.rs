@@ -1,0 +1,171 @@
+//! A tank of fluid at rest under gravity: the pressure must be rho0 g depth and the fluid must
+//! stay at rest.
+//!
+//! Fluid set on the lattice at rest has no pressure yet; switched on at once, gravity would
+//! start an acoustic oscillation as large as the hydrostatic pressure itself, which viscosity
+//! damps only over some 12 N^2 steps per e-fold for N layers. The case ramps gravity up over
+//! ten periods of the tank's slowest acoustic mode instead, so the fluid compresses almost
+//! quasi-statically, then holds it for five more periods before comparing.
+
+use super::snapshot::{snapshots, Snapshot};
+use crate::scene::{PressureGradient, Scene};
+use std::f64::consts::PI;
+
+/// An open-topped cubic tank `layers` particles wide and deep, filled to the brim.
+#[derive(Debug, Clone, Copy)]
+pub struct Tank {
+    /// Fluid depth D (m).
+    pub depth_m: f64,
+    /// Particles across the depth (and the width).
+    pub layers: usize,
+    pub gradient: PressureGradient,
+}
+
+/// |g| (m/s^2).
+const GRAVITY: f64 = 9.81;
+
+impl Tank {
+    pub fn new(layers: usize, gradient: PressureGradient) -> Self {
+        Self { depth_m: 0.1, layers, gradient }
+    }
+
+    pub fn spacing(&self) -> f64 {
+        self.depth_m / self.layers as f64
+    }
+
+    /// c (m/s): ten times sqrt(g D), so the fluid compresses by g D / c^2 = 1 % at the floor.
+    pub fn sound_speed(&self) -> f64 {
+        10.0 * (GRAVITY * self.depth_m).sqrt()
+    }
+
+    /// The period of the slowest acoustic mode, a quarter wave over the depth (s).
+    pub fn acoustic_period(&self) -> f64 {
+        4.0 * self.depth_m / self.sound_speed()
+    }
+
+    /// Gravity rises as (1 - cos) / 2 over this time (s).
+    pub fn ramp_s(&self) -> f64 {
+        10.0 * self.acoustic_period()
+    }
+
+    /// The time at which the tank is compared (s).
+    pub fn end_s(&self) -> f64 {
+        self.ramp_s() + 5.0 * self.acoustic_period()
+    }
+
+    /// Gravity at time t (m/s^2), along -y.
+    pub fn gravity(&self, t: f64) -> [f64; 3] {
+        let ramp = if t < self.ramp_s() { 0.5 * (1.0 - (PI * t / self.ramp_s()).cos()) } else { 1.0 };
+        [0.0, -GRAVITY * ramp, 0.0]
+    }
+
+    /// The scene: mirrored walls, negative pressure clamped (the free surface is at p = 0), and a
+    /// viscosity at which Eq. (10)'s viscous and acoustic terms are equal, to damp what the
+    /// ramp leaves.
+    pub fn scene(&self) -> Scene {
+        let s = self.spacing();
+        let (d, c) = (self.depth_m, self.sound_speed());
+        let nu = 0.25 * s * c;
+        let gradient = match self.gradient {
+            PressureGradient::Paper => "paper",
+            PressureGradient::Full => "full",
+        };
+        let text = format!(
+            r#"
+name = "hydrostatic_tank"
+[material]
+rest_density_kg_m3 = 1000.0
+sound_speed_m_s = {c:e}
+clamp_negative_pressure = true
+pressure_gradient = "{gradient}"
+particle_spacing_m = {s:e}
+gravity_m_s2 = [0.0, {g:e}, 0.0]
+[material.viscosity]
+operator = "laplacian"
+nu0_m2_s = {nu:e}
+[domain]
+min_m = [{lo:e}, {lo:e}, {lo:e}]
+max_m = [{hi:e}, {top:e}, {hi:e}]
+[simulation]
+end_time_s = {end:e}
+precision = "f64"
+walls = "mirrored"
+[[boundary]]
+shape = "box"
+min_m = [0.0, 0.0, 0.0]
+max_m = [{d:e}, {d:e}, {d:e}]
+open_top = true
+[[fluid_block]]
+min_m = [0.0, 0.0, 0.0]
+max_m = [{d:e}, {d:e}, {d:e}]
+"#,
+            g = -GRAVITY,
+            lo = -4.0 * s,
+            hi = d + 4.0 * s,
+            top = 1.5 * d,
+            end = self.end_s(),
+        );
+        Scene::parse(&text, "hydrostatic tank (generated)").expect("the generated tank is a valid scene")
+    }
+}
+
+/// What the tank measured.
+#[derive(Debug, Clone)]
+pub struct TankResult {
+    /// The largest |mean p - rho0 g mean depth| over the layers deeper than h, over rho0 g D.
+    pub pressure_error: f64,
+    /// The root mean square of each particle's pressure about its layer's mean, over rho0 g D:
+    /// weakly compressible SPH's pressure noise (c^2 times the density noise).
+    pub pressure_scatter: f64,
+    /// The least-squares slope of the layer pressures against rho0 g depth, through the origin,
+    /// over the same layers: 1 for the right hydrostatics.
+    pub pressure_ratio: f64,
+    /// The largest fluid speed at the end, over sqrt(g D).
+    pub residual_speed: f64,
+    /// The free surface, half a spacing above the highest particle (m).
+    pub surface_m: f64,
+    /// The end state, for plots.
+    pub snapshot: Snapshot,
+}
+
+/// Runs the tank and compares its pressure, layer by layer, with rho0 g depth. The layers
+/// within h of the free surface are left out: their kernel sums lack the fluid above, so their
+/// density and hence pressure read low (clamped to 0), whatever the pressure force does.
+pub fn simulate(tank: &Tank) -> Result<TankResult, String> {
+    let scene = tank.scene();
+    let gravity = |t: f64| tank.gravity(t);
+    let snapshot = snapshots(&scene, &[tank.end_s()], Some(&gravity))?.remove(0);
+    let rho0_g = scene.material.rest_density_kg_m3 * GRAVITY;
+    let s = tank.spacing();
+    let surface = snapshot.position.iter().map(|x| x[1]).fold(f64::MIN, f64::max) + 0.5 * s;
+    // Per layer: particles, sum of depths, sum of pressures.
+    let mut layers = vec![(0usize, 0.0, 0.0); tank.layers + 1];
+    let layer_of = |y: f64| (((surface - y) / s - 0.5).round().max(0.0) as usize).min(tank.layers);
+    for (x, p) in snapshot.position.iter().zip(&snapshot.pressure) {
+        let l = &mut layers[layer_of(x[1])];
+        *l = (l.0 + 1, l.1 + surface - x[1], l.2 + p);
+    }
+    let h = scene.support_radius();
+    // (mean depth, mean pressure) of the layers deeper than h.
+    let compared: Vec<(f64, f64)> = layers
+        .iter()
+        .filter(|l| l.0 > 0 && l.1 / l.0 as f64 > h)
+        .map(|&(n, depth, p)| (depth / n as f64, p / n as f64))
+        .collect();
+    let pressure_error =
+        compared.iter().map(|&(depth, p)| (p - rho0_g * depth).abs()).fold(0.0, f64::max) / (rho0_g * tank.depth_m);
+    let pressure_ratio =
+        compared.iter().map(|&(d, p)| d * p).sum::<f64>() / compared.iter().map(|&(d, _)| rho0_g * d * d).sum::<f64>();
+    let squares: f64 = snapshot
+        .position
+        .iter()
+        .zip(&snapshot.pressure)
+        .map(|(x, p)| {
+            let l = layers[layer_of(x[1])];
+            (p - l.2 / l.0 as f64).powi(2)
+        })
+        .sum();
+    let pressure_scatter = (squares / snapshot.pressure.len() as f64).sqrt() / (rho0_g * tank.depth_m);
+    let residual_speed = snapshot.max_speed() / (GRAVITY * tank.depth_m).sqrt();
+    Ok(TankResult { pressure_error, pressure_scatter, pressure_ratio, residual_speed, surface_m: surface, snapshot })
+}
