@@ -133,7 +133,8 @@ enum Command {
         /// Coarser resolutions only (seconds instead of minutes).
         #[arg(long)]
         quick: bool,
-        /// Run only these groups of cases (comma-separated): poiseuille, cross, tank.
+        /// Run only these groups of cases (comma-separated): poiseuille, cross, tank,
+        /// taylor-green.
         #[arg(long, value_delimiter = ',')]
         only: Vec<ValidationGroup>,
         /// Output folder for plots and validate.md.
@@ -384,13 +385,15 @@ enum ValidationGroup {
     Cross,
     /// The hydrostatic tank.
     Tank,
+    /// The Taylor-Green vortex, both operators.
+    TaylorGreen,
 }
 
 /// `coil validate`: runs the cases (those of `only`, or all), prints and writes the table; true
 /// when all pass.
 fn validate_command(quick: bool, only: &[ValidationGroup], out: &Path) -> Result<bool, String> {
     use coil::scene::ViscosityOperator;
-    use coil::validation::{cross_poiseuille, hydrostatic_tank, startup_poiseuille, CaseResult};
+    use coil::validation::{cross_poiseuille, hydrostatic_tank, startup_poiseuille, taylor_green, CaseResult};
     std::fs::create_dir_all(out).map_err(|e| format!("--out: {} cannot be created: {e}", out.display()))?;
     let resolutions: &[usize] = if quick { &[10, 20] } else { &[10, 20, 30] };
     let cross_across = if quick { 10 } else { 20 };
@@ -409,6 +412,10 @@ fn validate_command(quick: bool, only: &[ValidationGroup], out: &Path) -> Result
     }
     let tank_layers = if quick { 10 } else { 20 };
     cases.push((ValidationGroup::Tank, Box::new(move || hydrostatic_tank(tank_layers, Some(out)))));
+    let vortex_across = if quick { 20 } else { 40 };
+    for &op in &[ViscosityOperator::Stress, ViscosityOperator::Laplacian] {
+        cases.push((ValidationGroup::TaylorGreen, Box::new(move || taylor_green(vortex_across, op, Some(out)).map(|r| vec![r]))));
+    }
     cases.retain(|(group, _)| only.is_empty() || only.contains(group));
     let mut table = String::from("| case | error | tolerance | result | wall s | measured as |\n|---|---:|---:|---|---:|---|\n");
     let mut all = true;

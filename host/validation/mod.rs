@@ -3,6 +3,7 @@
 pub mod hydrostatic;
 pub mod poiseuille;
 pub mod snapshot;
+pub mod taylor_green;
 
 use crate::plot::{Axis, Chart, Line, Series, PALETTE};
 use crate::scene::{PressureGradient, ViscosityOperator};
@@ -10,6 +11,7 @@ use hydrostatic::Tank;
 use poiseuille::{cross_steady_velocity, relative_max_error, simulate, startup_velocity, Channel, CrossLaw};
 use std::path::Path;
 use std::time::Instant;
+use taylor_green::Vortex;
 
 /// One comparison of a simulation with its reference.
 #[derive(Debug, Clone)]
@@ -208,4 +210,51 @@ pub fn hydrostatic_tank(layers: usize, out: Option<&Path>) -> Result<Vec<CaseRes
             plot: None,
         },
     ])
+}
+
+/// The Taylor-Green vortex at `across` particles over the period: the measured decay rate of
+/// its amplitude against 8 pi^2 nu / L^2.
+pub fn taylor_green(across: usize, op: ViscosityOperator, out: Option<&Path>) -> Result<CaseResult, String> {
+    let vortex = Vortex::new(across, op);
+    let started = Instant::now();
+    let r = taylor_green::simulate(&vortex)?;
+    let exact = vortex.decay_rate();
+    let case = format!("Taylor-Green vortex, {}, {across} across", operator_name(op));
+    let plot = out
+        .map(|dir| {
+            let t_max = r.amplitudes.last().map_or(1.0, |p| p[0]);
+            let reference = (0..=50).map(|k| k as f64 / 50.0 * t_max).map(|t| [t * exact, (-exact * t).exp()]).collect();
+            let simulated = r.amplitudes.iter().map(|p| [p[0] * exact, p[1]]).collect();
+            let chart = Chart {
+                title: case.clone(),
+                x: Axis::linear("8 pi^2 nu t / L^2"),
+                y: Axis::log("amplitude / U"),
+                series: vec![
+                    Series {
+                        label: "exp(-8 pi^2 nu t / L^2)".into(),
+                        color: PALETTE[0],
+                        points: reference,
+                        line: Line::Solid,
+                        marker: 0.0,
+                    },
+                    Series { label: "sph".into(), color: PALETTE[1], points: simulated, line: Line::None, marker: 3.0 },
+                ],
+            };
+            let name =
+                format!("taylor_green_{}_{across}.png", if op == ViscosityOperator::Stress { "stress" } else { "laplacian" });
+            save_plot(&chart, &dir.join(name))
+        })
+        .transpose()?;
+    Ok(CaseResult {
+        case,
+        measure: format!(
+            "|rate / (8 pi^2 nu / L^2) - 1|, rate fitted to ln(amplitude) over one e-folding time (measured {:.4e} 1/s, exact {exact:.4e} 1/s); Re = 1, c = {} m/s (Mach 0.1)",
+            r.decay_rate,
+            vortex.sound_speed()
+        ),
+        error: (r.decay_rate / exact - 1.0).abs(),
+        tolerance: 0.05,
+        wall_s: started.elapsed().as_secs_f64(),
+        plot,
+    })
 }

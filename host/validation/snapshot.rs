@@ -36,7 +36,17 @@ pub type GravitySchedule<'a> = &'a (dyn Fn(f64) -> [f64; 3] + Sync);
 /// Errors name the scene and the instability.
 pub fn snapshots(scene: &Scene, times: &[f64], gravity: Option<GravitySchedule>) -> Result<Vec<Snapshot>, String> {
     let initial = initial_particles(scene, &scene.name).map_err(|e| e.to_string())?;
-    let run = Sample { scene, initial: &initial, times, gravity };
+    snapshots_from(scene, &initial, times, gravity)
+}
+
+/// [`snapshots`] from given initial particles (for fields a scene file cannot describe).
+pub fn snapshots_from(
+    scene: &Scene,
+    initial: &InitialParticles,
+    times: &[f64],
+    gravity: Option<GravitySchedule>,
+) -> Result<Vec<Snapshot>, String> {
+    let run = Sample { scene, initial, times, gravity };
     let result = match scene.simulation.precision {
         Precision::F32 => with_model::<f32, _>(scene, run),
         Precision::F64 => with_model::<f64, _>(scene, run),
