@@ -141,6 +141,18 @@ enum Command {
         #[arg(long, default_value = "out/validate")]
         out: PathBuf,
     },
+    /// Measure what each speed-for-accuracy knob buys on the two Poiseuille cases (resolution,
+    /// operator, dt safety factor, sound speed, precision, walls): error against the reference
+    /// and wall time per trial; writes tradeoff.md, tradeoff.csv and tradeoff.png (error against
+    /// time, the Pareto front drawn).
+    Tradeoff {
+        /// A few coarse trials (under a minute) instead of the full sweep (about 10 minutes).
+        #[arg(long)]
+        quick: bool,
+        /// Output folder.
+        #[arg(long, default_value = "out/tradeoff")]
+        out: PathBuf,
+    },
     /// List the shipped scenes, one line each, with what each reproduces.
     Scenes {
         /// Folder of scene files.
@@ -211,6 +223,13 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Scenes { dir } => list_scenes(&dir),
+        Command::Tradeoff { quick, out } => match tradeoff_command(quick, &out) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        },
         Command::Validate { quick, only, out } => match validate_command(quick, &only, &out) {
             Ok(true) => ExitCode::SUCCESS,
             Ok(false) => ExitCode::from(1),
@@ -373,6 +392,22 @@ fn bench_command(options: &BenchOptions, out: &Path) -> Result<(), String> {
     write("bench.png", &chart(&report).render(900, 640).to_png())?;
     println!("{text}");
     println!("report in {}", out.display());
+    Ok(())
+}
+
+/// `coil tradeoff`: runs the sweeps and writes the table and the plot.
+fn tradeoff_command(quick: bool, out: &Path) -> Result<(), String> {
+    use coil::validation::tradeoff::{chart, csv, markdown, run, trials};
+    std::fs::create_dir_all(out).map_err(|e| format!("--out: {} cannot be created: {e}", out.display()))?;
+    let measured = run(trials(quick))?;
+    let write = |name: &str, bytes: &[u8]| {
+        let path = out.join(name);
+        write_atomically(&path, bytes).map_err(|e| format!("{}: cannot be written: {e}", path.display()))
+    };
+    write("tradeoff.md", markdown(&measured).as_bytes())?;
+    write("tradeoff.csv", csv(&measured).as_bytes())?;
+    write("tradeoff.png", &chart(&measured).render(900, 640).to_png())?;
+    println!("table and plot in {}", out.display());
     Ok(())
 }
 

@@ -103,15 +103,24 @@ impl Axis {
                     }
                 }
             }
-            return ticks;
+            if ticks.len() >= 2 {
+                return ticks;
+            }
+            // Less than a factor of 2.5 shown: evenly spaced values, placed on the log scale.
+            return linear_ticks(10f64.powf(lo), 10f64.powf(hi));
         }
-        let raw = (hi - lo) / 6.0;
-        let magnitude = 10f64.powf(raw.log10().floor());
-        let step = [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * magnitude).find(|&s| s >= raw).unwrap_or(10.0 * magnitude);
-        let first = (lo / step).ceil() as i64;
-        let last = (hi / step).floor() as i64;
-        (first..=last).map(|k| k as f64 * step).collect()
+        linear_ticks(lo, hi)
     }
+}
+
+/// Round tick values inside (lo, hi), about six of them.
+fn linear_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let raw = (hi - lo) / 6.0;
+    let magnitude = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * magnitude).find(|&s| s >= raw).unwrap_or(10.0 * magnitude);
+    let first = (lo / step).ceil() as i64;
+    let last = (hi / step).floor() as i64;
+    (first..=last).map(|k| k as f64 * step).collect()
 }
 
 /// A short label for a tick value.
@@ -228,6 +237,9 @@ mod tests {
     fn log_ticks_are_decades_or_their_1_2_5_steps() {
         assert_eq!(Axis::log("x").ticks(-0.2, 3.3), vec![1.0, 10.0, 100.0, 1000.0]);
         assert_eq!(Axis::log("x").ticks(0.1, 0.9), vec![2.0, 5.0]);
+        // 5.4 to 7.2: no 1-2-5 value inside, so evenly spaced ones.
+        let narrow = Axis::log("x").ticks(5.4f64.log10(), 7.2f64.log10());
+        assert!(narrow.len() >= 3 && narrow.iter().all(|&t| (5.4..=7.2).contains(&t)), "{narrow:?}");
     }
 
     #[test]

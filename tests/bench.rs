@@ -1,13 +1,11 @@
 //! `coil bench`: Table I's sizes are the particle counts the report claims, and a small run
 //! writes its report files with the paper's figures beside the measured ones.
 
+mod common;
+
 use coil::bench::{dam_break, TABLE_I};
 use coil::setup::initial_particles;
-use std::process::Command;
-
-fn coil(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_coil")).args(args).output().expect("coil runs")
-}
+use common::coil;
 
 #[test]
 fn each_table_size_has_the_fluid_particles_its_label_names() {

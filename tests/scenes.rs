@@ -7,8 +7,8 @@ use coil::scene::Scene;
 use coil::setup::initial_particles;
 use coil::simulation::Simulation;
 use coil_kernels::cross_viscosity::Newtonian;
+use common::coil;
 use std::path::Path;
-use std::process::Command;
 
 fn shipped_scenes() -> Vec<std::path::PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
@@ -36,10 +36,6 @@ fn every_shipped_scene_loads_and_steps() {
         }
         assert_eq!(sim.removed, 0, "{}", path.display());
     }
-}
-
-fn coil(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_coil")).args(args).output().expect("coil runs")
 }
 
 #[test]

@@ -1,6 +1,8 @@
 //! Validation against published references at quick sizes; `coil validate` runs the full set
 //! and reports each error against its tolerance.
 
+mod common;
+
 use coil::scene::{PressureGradient, ViscosityOperator, Walls};
 use coil::validation::hydrostatic::{self, Tank};
 use coil::validation::poiseuille::{cross_steady_velocity, relative_max_error, simulate, startup_velocity, Channel, CrossLaw};
@@ -89,4 +91,24 @@ fn the_taylor_green_vortex_decays_at_the_exact_rate() {
     let fine = taylor_green(40, ViscosityOperator::Stress, None).expect("stable");
     eprintln!("paper's operator: {:.4} at 20 across, {:.4} at 40", coarse.error, fine.error);
     assert!(fine.passed() && fine.error < 0.5 * coarse.error, "{} then {}", coarse.error, fine.error);
+}
+
+/// `coil tradeoff --quick` writes its table, CSV and plot; of its knobs the paper's walls must
+/// cost accuracy (measured: 0.21 against 0.011 at 10 across) and f32 must not (0.0106 both).
+#[test]
+fn tradeoff_quick_writes_its_report() {
+    let out = std::env::temp_dir().join(format!("coil-tradeoff-{}", std::process::id()));
+    let run = common::coil(&["tradeoff", "--quick", "--out", out.to_str().expect("utf-8 path")]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let csv = std::fs::read_to_string(out.join("tradeoff.csv")).expect("tradeoff.csv");
+    let error = |setting: &str| -> f64 {
+        let row = csv.lines().find(|l| l.contains(setting)).unwrap_or_else(|| panic!("no {setting} row in {csv}"));
+        row.rsplit(',').nth(2).and_then(|e| e.parse().ok()).expect("an error column")
+    };
+    let base = error("10 across, Laplacian");
+    assert!(error("paper's (at rest)") > 5.0 * base, "{csv}");
+    assert!((error("\"f32\"") - base).abs() < 0.1 * base, "{csv}");
+    assert!(std::fs::metadata(out.join("tradeoff.png")).expect("tradeoff.png").len() > 1000);
+    assert!(std::fs::read_to_string(out.join("tradeoff.md")).expect("tradeoff.md").contains("| start-up | walls |"));
+    std::fs::remove_dir_all(&out).ok();
 }

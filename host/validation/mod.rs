@@ -4,6 +4,7 @@ pub mod hydrostatic;
 pub mod poiseuille;
 pub mod snapshot;
 pub mod taylor_green;
+pub mod tradeoff;
 
 use crate::plot::{Axis, Chart, Line, Series, PALETTE};
 use crate::scene::{PressureGradient, ViscosityOperator};
@@ -87,7 +88,13 @@ fn save_plot(chart: &Chart, path: &Path) -> Result<String, String> {
 /// The start-up Poiseuille flow against Morris et al.'s series, at `across` particles over the
 /// gap: L-infinity error over all sampled times, relative to the steady peak.
 pub fn startup_poiseuille(across: usize, op: ViscosityOperator, out: Option<&Path>) -> Result<CaseResult, String> {
-    let channel = Channel::morris(across, op);
+    startup_poiseuille_in(&Channel::morris(across, op), out)
+}
+
+/// [`startup_poiseuille`] in a given channel (its resolution, operator, walls, precision, c and
+/// dt safety factor), for the trade-off sweeps.
+pub fn startup_poiseuille_in(channel: &Channel, out: Option<&Path>) -> Result<CaseResult, String> {
+    let (channel, across, op) = (*channel, channel.across, channel.operator);
     let started = Instant::now();
     let times = MORRIS_TIMES.map(|t| t * channel.gap_m * channel.gap_m / channel.nu0_m2_s);
     let profiles = simulate(&channel, &times)?;
@@ -110,8 +117,9 @@ pub fn startup_poiseuille(across: usize, op: ViscosityOperator, out: Option<&Pat
     Ok(CaseResult {
         case,
         measure: format!(
-            "max |u - u_ref| / u_max at nu t / L^2 = {MORRIS_TIMES:?}; c = {} m/s (Mach 0.01)",
-            channel.sound_speed_m_s
+            "max |u - u_ref| / u_max at nu t / L^2 = {MORRIS_TIMES:?}; c = {} m/s (Mach {})",
+            channel.sound_speed_m_s,
+            channel.newtonian_peak() / channel.sound_speed_m_s
         ),
         error,
         tolerance: 0.03,
@@ -124,7 +132,13 @@ pub fn startup_poiseuille(across: usize, op: ViscosityOperator, out: Option<&Pat
 /// profile integrated from its exact shear stress: L-infinity error over the centre velocity.
 pub fn cross_poiseuille(across: usize, k_s: f64, n: f64, out: Option<&Path>) -> Result<CaseResult, String> {
     let law = CrossLaw { nu_inf_m2_s: 0.25e-6, k_s, n };
-    let channel = Channel { cross: Some(law), ..Channel::morris(across, ViscosityOperator::Stress) };
+    cross_poiseuille_in(&Channel { cross: Some(law), ..Channel::morris(across, ViscosityOperator::Stress) }, out)
+}
+
+/// [`cross_poiseuille`] in a given channel, whose `cross` must be set.
+pub fn cross_poiseuille_in(channel: &Channel, out: Option<&Path>) -> Result<CaseResult, String> {
+    let law = channel.cross.expect("a Cross channel");
+    let (channel, across, k_s, n) = (*channel, channel.across, law.k_s, law.n);
     let started = Instant::now();
     // The slowest mode decays at the rate of nu_inf: 0.75 L^2 / nu_inf leaves e^-30 of it.
     let end = 0.75 * channel.gap_m * channel.gap_m / law.nu_inf_m2_s;

@@ -28,10 +28,13 @@ pub struct FluidSample<R> {
     pub pressure: R,
 }
 
-/// The fluid at a point `x` (m) from the fluid particles within h of it: a linear fit weighted
-/// by poly6 (moving least squares), exact for linear fields, so one-sided neighbors next to a
-/// wall do not bias it. Falls back to the kernel-weighted mean (Shepard) where the neighbors
-/// are too flat for a fit, and to rest at zero pressure where there is no fluid.
+/// The fluid at a point `x` (m) from the fluid particles within h of it. Velocity: a linear fit
+/// weighted by poly6 (moving least squares), exact for linear fields, so one-sided neighbors
+/// next to a wall do not bias it; the kernel-weighted mean (Shepard) where the neighbors are
+/// too flat for a fit. Pressure: the kernel-weighted mean, never extrapolated: a fit reaches
+/// beyond the fluid's values, and walls that answer a pressure wave with more than it brought
+/// feed it (measured: a channel at Mach 1e-4 blew up). Rest at zero pressure where there is no
+/// fluid.
 #[inline(always)]
 pub fn fluid_at<R: Real, T: Topology>(
     x: [f64; 3],
@@ -42,14 +45,13 @@ pub fn fluid_at<R: Real, T: Topology>(
     fluid: &Fluid<R>,
 ) -> FluidSample<R> {
     let inverse_h = R::ONE / fluid.kernels.h;
-    // Moments of the weights over offsets q = (x_j - x) / h, and of velocity and pressure.
+    // Moments of the weights over offsets q = (x_j - x) / h, and of velocity; sum of pressure.
     let mut w0 = R::ZERO;
     let mut w1 = Vec3::zero();
     let mut w2 = SymTensor::zero();
     let mut v0 = Vec3::zero();
     let mut v1 = Mat3::zero();
     let mut p0 = R::ZERO;
-    let mut p1 = Vec3::zero();
     neighborhood.for_each_particle_near(x, fluid.kernels.h2, |j, r, r2: R| {
         if !fluid.is_boundary(id.at(j)) {
             let w = fluid.kernels.poly6(r2);
@@ -63,29 +65,27 @@ pub fn fluid_at<R: Real, T: Topology>(
             v0 += v * w;
             v1.add_outer(q * w, v);
             p0 += p * w;
-            p1 += q * (p * w);
         }
     });
     if !(w0 > R::ZERO) {
         return FluidSample { velocity: Vec3::zero(), pressure: R::ZERO };
     }
-    // The fit f(q) = mean_f + B^T (q - mean_q), centred so that its slope B solves the weighted
-    // covariance C B = sum w (q - mean_q) f^T; at q = 0 it is mean_f - B^T mean_q, which needs
-    // only u = C^-1 mean_q, and sum w (q - mean_q) f^T = F1 - mean_q F0^T.
+    // The fit v(q) = mean_v + B^T (q - mean_q), centred so that its slope B solves the weighted
+    // covariance C B = sum w (q - mean_q) v^T; at q = 0 it is mean_v - B^T mean_q, which needs
+    // only u = C^-1 mean_q, and sum w (q - mean_q) v^T = V1 - mean_q V0^T.
     let inv_w0 = R::ONE / w0;
     let mean_q = w1 * inv_w0;
     let mean_v = v0 * inv_w0;
-    let mean_p = p0 * inv_w0;
     let covariance = w2.add(SymTensor::outer(mean_q).scaled(-w0));
-    match covariance.solve(mean_q) {
+    let velocity = match covariance.solve(mean_q) {
         Some(u) => {
-            let mut centred_v = v1;
-            centred_v.add_outer(mean_q, -v0);
-            let centred_p = p1 - mean_q * p0;
-            FluidSample { velocity: mean_v - centred_v.transpose_dot(u), pressure: mean_p - centred_p.dot(u) }
+            let mut centred = v1;
+            centred.add_outer(mean_q, -v0);
+            mean_v - centred.transpose_dot(u)
         }
-        None => FluidSample { velocity: mean_v, pressure: mean_p },
-    }
+        None => mean_v,
+    };
+    FluidSample { velocity, pressure: p0 * inv_w0 }
 }
 
 /// Arguments of the mirrored-wall pass.

@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 use coil::scene::Scene;
+use std::process::{Command, Output};
 
 /// A scene from TOML text, validated like a file.
 pub fn scene(text: &str) -> Scene {
@@ -47,4 +48,9 @@ max_m = [{fx}, {fy}, {fz}]
         fy = fluid_m[1],
         fz = fluid_m[2],
     )
+}
+
+/// Runs the `coil` binary with `args`.
+pub fn coil(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_coil")).args(args).output().expect("coil runs")
 }

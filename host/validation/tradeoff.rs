@@ -1,0 +1,190 @@
+//! `coil tradeoff`: what each knob that trades speed for accuracy buys, measured on the two
+//! Poiseuille cases. Each trial changes one knob of a base channel and records the error
+//! against the reference and the wall time; the points no other trial beats on both are the
+//! Pareto front.
+
+use super::poiseuille::{Channel, CrossLaw};
+use super::{cross_poiseuille_in, startup_poiseuille_in};
+use crate::plot::{Axis, Chart, Line, Series, PALETTE};
+use crate::scene::{Precision, ViscosityOperator, Walls};
+
+/// One run of a sweep.
+#[derive(Debug, Clone)]
+pub struct Trial {
+    /// "start-up" (Newtonian, Morris et al.'s series) or "Cross" (steady, shear-thinning).
+    pub case: &'static str,
+    /// The knob this trial turns away from the base ("base" for the base itself).
+    pub knob: &'static str,
+    /// The setting, in words.
+    pub setting: String,
+    pub channel: Channel,
+}
+
+/// A trial's outcome.
+#[derive(Debug, Clone)]
+pub struct Measured {
+    pub trial: Trial,
+    /// L-infinity error relative to the peak speed.
+    pub error: f64,
+    pub wall_s: f64,
+    /// Whether no other trial of the same case is at least as good on both and better on one.
+    pub pareto: bool,
+}
+
+fn operator_word(op: ViscosityOperator) -> &'static str {
+    match op {
+        ViscosityOperator::Stress => "paper's",
+        ViscosityOperator::Laplacian => "Laplacian",
+    }
+}
+
+/// The trials: the start-up case at 20 across with the Laplacian operator as base (10 across
+/// with `quick`), and the Cross case (K = 10 s, n = 0.5, paper's operator) at 10 across.
+pub fn trials(quick: bool) -> Vec<Trial> {
+    let base_across = if quick { 10 } else { 20 };
+    let base = Channel::morris(base_across, ViscosityOperator::Laplacian);
+    let mut t = Vec::new();
+    let mut add = |case, knob, setting: String, channel| t.push(Trial { case, knob, setting, channel });
+    let resolutions: &[usize] = if quick { &[10] } else { &[10, 20, 30] };
+    for op in [ViscosityOperator::Laplacian, ViscosityOperator::Stress] {
+        for &across in resolutions {
+            let knob = if across == base_across && op == base.operator { "base" } else { "resolution, operator" };
+            add("start-up", knob, format!("{across} across, {} operator", operator_word(op)), Channel::morris(across, op));
+        }
+    }
+    let safety: &[f64] = if quick { &[0.5] } else { &[0.5, 0.25] };
+    for &f in safety {
+        add("start-up", "dt safety factor", format!("{f} x the Eq. (10) bound"), Channel { safety_factor: f, ..base });
+    }
+    let machs: &[f64] = if quick { &[0.1] } else { &[0.1, 1e-3, 1e-4] };
+    for &mach in machs {
+        let c = base.newtonian_peak() / mach;
+        add("start-up", "sound speed", format!("c = {c:.1e} m/s (Mach {mach})"), Channel { sound_speed_m_s: c, ..base });
+    }
+    add("start-up", "precision", "f32".into(), Channel { precision: Precision::F32, ..base });
+    add("start-up", "walls", "paper's (at rest)".into(), Channel { walls: Walls::Paper, ..base });
+    if !quick {
+        let stress = Channel::morris(base_across, ViscosityOperator::Stress);
+        add("start-up", "precision", "f32, paper's operator".into(), Channel { precision: Precision::F32, ..stress });
+        let law = CrossLaw { nu_inf_m2_s: 0.25e-6, k_s: 10.0, n: 0.5 };
+        let cross = |across| Channel { cross: Some(law), ..Channel::morris(across, ViscosityOperator::Stress) };
+        add("Cross", "base", "10 across".into(), cross(10));
+        add("Cross", "resolution", "20 across".into(), cross(20));
+        add("Cross", "precision", "f32".into(), Channel { precision: Precision::F32, ..cross(10) });
+        let c = 0.1 * cross(10).sound_speed_m_s;
+        add("Cross", "sound speed", format!("c = {c:.1e} m/s (Mach 0.1)"), Channel { sound_speed_m_s: c, ..cross(10) });
+        add("Cross", "dt safety factor", "0.5 x the Eq. (10) bound".into(), Channel { safety_factor: 0.5, ..cross(10) });
+    }
+    t
+}
+
+/// Runs every trial, printing each as it finishes, and marks the Pareto fronts.
+pub fn run(trials: Vec<Trial>) -> Result<Vec<Measured>, String> {
+    let mut out = Vec::with_capacity(trials.len());
+    for trial in trials {
+        let r = if trial.channel.cross.is_some() {
+            cross_poiseuille_in(&trial.channel, None)?
+        } else {
+            startup_poiseuille_in(&trial.channel, None)?
+        };
+        println!("{:<9} {:<22} {:<40} error {:>8.4}  {:>7.1} s", trial.case, trial.knob, trial.setting, r.error, r.wall_s);
+        out.push(Measured { trial, error: r.error, wall_s: r.wall_s, pareto: false });
+    }
+    mark_pareto(&mut out);
+    Ok(out)
+}
+
+/// Marks the trials that no other trial of the same case dominates (error and time both no
+/// worse, one better).
+pub fn mark_pareto(m: &mut [Measured]) {
+    let points: Vec<(&str, f64, f64)> = m.iter().map(|x| (x.trial.case, x.error, x.wall_s)).collect();
+    for (k, x) in m.iter_mut().enumerate() {
+        let (case, e, w) = points[k];
+        x.pareto =
+            !points.iter().enumerate().any(|(j, &(c, e2, w2))| j != k && c == case && e2 <= e && w2 <= w && (e2 < e || w2 < w));
+    }
+}
+
+/// The table, Markdown.
+pub fn markdown(m: &[Measured]) -> String {
+    let mut s = String::from(
+        "# coil tradeoff\n\nEach row changes one knob of the base (start-up: Morris et al.'s channel, Laplacian \
+         operator, 20 across, mirrored walls, f64, Mach 0.01, dt at the Eq. (10) bound; Cross: K = 10 s, n = 0.5, \
+         paper's operator, 10 across). Error: L-infinity against the reference over the peak speed. \
+         `*`: on the Pareto front of its case.\n\n\
+         | case | knob | setting | error | wall s | front |\n|---|---|---|---:|---:|---|\n",
+    );
+    for x in m {
+        s += &format!(
+            "| {} | {} | {} | {:.4} | {:.1} | {} |\n",
+            x.trial.case,
+            x.trial.knob,
+            x.trial.setting,
+            x.error,
+            x.wall_s,
+            if x.pareto { "*" } else { "" }
+        );
+    }
+    s
+}
+
+/// The table, CSV.
+pub fn csv(m: &[Measured]) -> String {
+    let mut s = String::from("case,knob,setting,error,wall_s,pareto\n");
+    for x in m {
+        s += &format!(
+            "{},\"{}\",\"{}\",{:.6e},{:.3},{}\n",
+            x.trial.case, x.trial.knob, x.trial.setting, x.error, x.wall_s, x.pareto
+        );
+    }
+    s
+}
+
+/// Error against wall time, log-log: every trial as a point, each case's Pareto front as a line.
+pub fn chart(m: &[Measured]) -> Chart {
+    let mut series = Vec::new();
+    for (k, case) in ["start-up", "Cross"].into_iter().enumerate() {
+        let of_case: Vec<&Measured> = m.iter().filter(|x| x.trial.case == case).collect();
+        if of_case.is_empty() {
+            continue;
+        }
+        let color = PALETTE[k];
+        series.push(Series {
+            label: format!("{case} trials"),
+            color,
+            points: of_case.iter().map(|x| [x.wall_s, x.error]).collect(),
+            line: Line::None,
+            marker: 3.0,
+        });
+        let mut front: Vec<[f64; 2]> = of_case.iter().filter(|x| x.pareto).map(|x| [x.wall_s, x.error]).collect();
+        front.sort_by(|a, b| a[0].total_cmp(&b[0]));
+        series.push(Series { label: format!("{case} Pareto front"), color, points: front, line: Line::Solid, marker: 5.0 });
+    }
+    Chart { title: "error against wall time".into(), x: Axis::log("wall s"), y: Axis::log("L-inf error / peak"), series }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn measured(case: &'static str, error: f64, wall_s: f64) -> Measured {
+        let channel = Channel::morris(10, ViscosityOperator::Laplacian);
+        Measured { trial: Trial { case, knob: "k", setting: String::new(), channel }, error, wall_s, pareto: false }
+    }
+
+    #[test]
+    fn the_pareto_front_keeps_what_nothing_beats_on_both_within_a_case() {
+        let mut m = vec![
+            measured("start-up", 0.1, 1.0),
+            measured("start-up", 0.01, 10.0),
+            measured("start-up", 0.05, 20.0),
+            measured("start-up", 0.1, 2.0),
+            measured("Cross", 0.5, 100.0),
+        ];
+        mark_pareto(&mut m);
+        let front: Vec<bool> = m.iter().map(|x| x.pareto).collect();
+        // Slower and no better than the first; slower and worse than the second; the Cross
+        // trial is compared with Cross trials only.
+        assert_eq!(front, [true, true, false, false, true]);
+    }
+}

@@ -1,0 +1,223 @@
+//! Stability at the extremes: every parameter driven to the ends of its range runs cleanly or
+//! is stopped by the guard with its diagnosis, never written out as NaN frames.
+
+mod common;
+
+use coil::run::{run, Backend, RunError, RunOptions, Summary};
+use coil::scene::Scene;
+use coil::time_step::StabilityBound;
+use std::path::PathBuf;
+
+/// A 0.1 m cube of fluid (spacing `spacing_m`) dropped into a 0.2 m box under gravity, with the
+/// `[material]` and `[material.viscosity]` lines given, run for `steps` steps of the Eq. (10)
+/// bound (or of `fixed_dt_factor` times it).
+struct Drop {
+    spacing_m: f64,
+    material: String,
+    viscosity: String,
+    steps: f64,
+    fixed_dt_factor: Option<f64>,
+}
+
+impl Drop {
+    fn new(viscosity: &str) -> Self {
+        Self {
+            spacing_m: 0.02,
+            material: "sound_speed_m_s = 5.0".into(),
+            viscosity: viscosity.into(),
+            steps: 300.0,
+            fixed_dt_factor: None,
+        }
+    }
+
+    fn scene(&self) -> Scene {
+        let probe = common::scene(&self.text(1.0, ""));
+        let bound = StabilityBound::new(
+            probe.support_radius(),
+            probe.material.sound_speed_m_s,
+            probe.material.viscosity.nu0_m2_s.max(probe.material.viscosity.nu_inf()),
+        )
+        .dt()
+        .0;
+        let time_step = match self.fixed_dt_factor {
+            Some(f) => format!("[simulation.time_step]\nfixed_s = {:e}\nallow_above_stability_bound = true\n", f * bound),
+            None => String::new(),
+        };
+        let dt = bound * self.fixed_dt_factor.unwrap_or(1.0);
+        common::scene(&self.text(self.steps * dt, &time_step))
+    }
+
+    fn text(&self, end_s: f64, time_step: &str) -> String {
+        let s = self.spacing_m;
+        format!(
+            r#"
+name = "drop"
+[material]
+particle_spacing_m = {s:e}
+clamp_negative_pressure = true
+{material}
+[material.viscosity]
+{viscosity}
+[domain]
+min_m = [-0.15, -0.15, -0.15]
+max_m = [0.35, 0.4, 0.35]
+[simulation]
+end_time_s = {end_s:e}
+precision = "f64"
+{time_step}
+[output]
+every_s = {every:e}
+[[boundary]]
+shape = "box"
+min_m = [0.0, 0.0, 0.0]
+max_m = [0.2, 0.25, 0.2]
+open_top = true
+[[fluid_block]]
+min_m = [0.05, 0.05, 0.05]
+max_m = [0.15, 0.15, 0.15]
+"#,
+            material = self.material,
+            viscosity = self.viscosity,
+            every = end_s / 4.0,
+        )
+    }
+
+    fn run(&self, name: &str) -> (Result<Summary, RunError>, PathBuf) {
+        let out = std::env::temp_dir().join(format!("coil-stability-{name}-{}", std::process::id()));
+        let options = RunOptions {
+            backend: Backend::Cpu,
+            out_dir: out.clone(),
+            precision: None,
+            quiet: true,
+            preview: false,
+            overrides: vec![],
+        };
+        (run(&self.scene(), "drop.toml", &options), out)
+    }
+
+    /// Runs and requires a clean finish with finite, physical speeds: below the free fall from
+    /// the top of the box, sqrt(2 g 0.25 m) = 2.2 m/s, with room.
+    fn runs_cleanly(&self, name: &str) -> Summary {
+        let (result, out) = self.run(name);
+        std::fs::remove_dir_all(&out).ok();
+        let summary = result.unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(summary.max_speed_m_s.is_finite() && summary.max_speed_m_s < 3.0, "{name}: {summary:?}");
+        summary
+    }
+}
+
+#[test]
+fn extreme_shear_thinning_runs_stably_at_the_bound() {
+    let cases = [
+        ("n=10", "nu0_m2_s = 0.05\nnu_inf_m2_s = 0.005\ncross_k_s = 1.0\ncross_n = 10.0"),
+        ("K=100", "nu0_m2_s = 0.05\nnu_inf_m2_s = 0.005\ncross_k_s = 100.0\ncross_n = 1.0"),
+        ("nu 0.002..2", "nu0_m2_s = 2.0\nnu_inf_m2_s = 0.002\ncross_k_s = 1.0\ncross_n = 1.0"),
+        ("nu 0.2..20", "nu0_m2_s = 20.0\nnu_inf_m2_s = 0.2\ncross_k_s = 1.0\ncross_n = 1.0"),
+    ];
+    for (name, viscosity) in cases {
+        let s = Drop::new(viscosity).runs_cleanly(name);
+        assert!(s.steps >= 300, "{name}: {s:?}");
+    }
+}
+
+/// Eq. (10) keeps a factor of 10 below the acoustic and viscous limits, so 1.5 times the bound
+/// still runs (measured below); the guard must stop a step far enough above the bound, keep the
+/// frames written before, name dt as the likely cause, and never write a NaN.
+#[test]
+fn above_the_bound_the_guard_stops_the_run_with_its_diagnosis() {
+    let viscous = "nu0_m2_s = 0.05";
+    let mut drop = Drop::new(viscous);
+    drop.fixed_dt_factor = Some(1.5);
+    drop.runs_cleanly("1.5x bound");
+    drop.fixed_dt_factor = Some(40.0);
+    let (result, out) = drop.run("40x bound");
+    match result {
+        Err(RunError::Unstable(instability, summary)) => {
+            let text = RunError::Unstable(instability.clone(), summary.clone()).to_string();
+            assert!(text.contains("above the Eq. (10) bound"), "{text}");
+            assert!(summary.frames >= 1, "the frame at t = 0 is kept: {summary:?}");
+            let frames: Vec<_> = std::fs::read_dir(&out)
+                .expect("output folder")
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.file_name().is_some_and(|f| f.to_string_lossy().starts_with("frame_")))
+                .collect();
+            assert_eq!(frames.len(), summary.frames, "{frames:?}");
+            for frame in frames {
+                let cloud = coil::output::vtu_read::read_frame(&frame).expect("a whole frame");
+                assert!(cloud.position.iter().flatten().all(|x| x.is_finite()), "{}: non-finite position", frame.display());
+            }
+        }
+        other => panic!("expected the guard to stop the run, got {other:?}"),
+    }
+    std::fs::remove_dir_all(&out).ok();
+}
+
+#[test]
+fn very_low_and_very_high_sound_speeds_run() {
+    // Mach about 1 for the falling block at 0.5 m/s, and c = 500 m/s, where the acoustic term
+    // sets dt 100 times below the default scene's.
+    for c in [0.5, 500.0] {
+        let mut drop = Drop::new("nu0_m2_s = 0.01");
+        drop.material = format!("sound_speed_m_s = {c}");
+        drop.runs_cleanly(&format!("c={c}"));
+    }
+}
+
+#[test]
+fn coarse_and_fine_spacing_run() {
+    // 2 particles across the block, and 20.
+    for s in [0.05, 0.005] {
+        let mut drop = Drop::new("nu0_m2_s = 0.01");
+        drop.spacing_m = s;
+        drop.steps = if s < 0.01 { 60.0 } else { 300.0 };
+        drop.runs_cleanly(&format!("s={s}"));
+    }
+}
+
+/// Two particles at the same position: the spiky gradient is zero at r = 0, so their pair
+/// forces are finite (zero), and the run goes on.
+#[test]
+fn coincident_particles_get_finite_forces() {
+    use coil::model::StressModel;
+    use coil::setup::initial_particles;
+    use coil::simulation::Simulation;
+    use coil_kernels::cross_viscosity::Newtonian;
+    let scene = Drop::new("nu0_m2_s = 0.01").scene();
+    let mut initial = initial_particles(&scene, "drop.toml").expect("valid");
+    let twin = initial.fluid[7];
+    initial.fluid.push(twin);
+    initial.fluid_velocity.push([0.1, 0.0, 0.0]);
+    let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.01 }));
+    for _ in 0..50 {
+        sim.step().expect("coincident particles do not blow up the run");
+    }
+    let p = &sim.particles;
+    assert!((0..p.len()).all(|i| (0..3).all(|a| p.acceleration[a][i].is_finite() && p.velocity[a][i].is_finite())));
+}
+
+#[test]
+fn an_empty_scene_and_a_single_particle_run_cleanly() {
+    let mut scene = Drop::new("nu0_m2_s = 0.01").scene();
+    let out = std::env::temp_dir().join(format!("coil-stability-empty-{}", std::process::id()));
+    let options = RunOptions {
+        backend: Backend::Cpu,
+        out_dir: out.clone(),
+        precision: None,
+        quiet: true,
+        preview: false,
+        overrides: vec![],
+    };
+    let block = scene.fluid_blocks.pop().expect("the drop's block");
+    let summary = run(&scene, "empty.toml", &options).expect("walls and no fluid run");
+    assert_eq!(summary.fluid_particles, 0);
+    std::fs::remove_dir_all(&out).ok();
+    // One particle 0.1 m above the floor, falling for 0.1 s (0.049 m): nothing is near it, so
+    // it falls freely, v = g t, which leap-frog integrates exactly.
+    scene.fluid_blocks.push(coil::scene::FluidBlock { min_m: [0.09, 0.09, 0.09], max_m: [0.11, 0.11, 0.11], ..block });
+    scene.simulation.end_time_s = 0.1;
+    let summary = run(&scene, "single.toml", &options).expect("a single particle runs");
+    assert_eq!(summary.fluid_particles, 1);
+    let expected = 9.8 * summary.simulated_s;
+    assert!((summary.max_speed_m_s - expected).abs() < 1e-9, "{summary:?}, expected {expected} m/s");
+    std::fs::remove_dir_all(&out).ok();
+}
