@@ -134,7 +134,7 @@ enum Command {
         #[arg(long)]
         quick: bool,
         /// Run only these groups of cases (comma-separated): poiseuille, cross, tank,
-        /// taylor-green.
+        /// taylor-green, torus.
         #[arg(long, value_delimiter = ',')]
         only: Vec<ValidationGroup>,
         /// Output folder for plots and validate.md.
@@ -422,13 +422,15 @@ enum ValidationGroup {
     Tank,
     /// The Taylor-Green vortex, both operators.
     TaylorGreen,
+    /// The spreading torus of Fig. 3, ordered by K.
+    Torus,
 }
 
 /// `coil validate`: runs the cases (those of `only`, or all), prints and writes the table; true
 /// when all pass.
 fn validate_command(quick: bool, only: &[ValidationGroup], out: &Path) -> Result<bool, String> {
     use coil::scene::ViscosityOperator;
-    use coil::validation::{cross_poiseuille, hydrostatic_tank, startup_poiseuille, taylor_green, CaseResult};
+    use coil::validation::{cross_poiseuille, hydrostatic_tank, startup_poiseuille, taylor_green, torus_ordering, CaseResult};
     std::fs::create_dir_all(out).map_err(|e| format!("--out: {} cannot be created: {e}", out.display()))?;
     let resolutions: &[usize] = if quick { &[10, 20] } else { &[10, 20, 30] };
     let cross_across = if quick { 10 } else { 20 };
@@ -451,6 +453,8 @@ fn validate_command(quick: bool, only: &[ValidationGroup], out: &Path) -> Result
     for &op in &[ViscosityOperator::Stress, ViscosityOperator::Laplacian] {
         cases.push((ValidationGroup::TaylorGreen, Box::new(move || taylor_green(vortex_across, op, Some(out)).map(|r| vec![r]))));
     }
+    let torus_spacing = if quick { 0.04 } else { 0.03 };
+    cases.push((ValidationGroup::Torus, Box::new(move || torus_ordering(torus_spacing, 0.3).map(|r| vec![r]))));
     cases.retain(|(group, _)| only.is_empty() || only.contains(group));
     let mut table = String::from("| case | error | tolerance | result | wall s | measured as |\n|---|---:|---:|---|---:|---|\n");
     let mut all = true;
