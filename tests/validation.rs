@@ -67,8 +67,9 @@ fn paper_walls_slip_where_mirrored_walls_do_not() {
 }
 
 /// The tank, 10 layers deep: with the full pressure gradient the layer pressures are rho0 g
-/// depth within the case's 5 % (measured 0.017) and the fluid is at rest (0.0024 of sqrt(g D)); Eq. (7) as printed
-/// weighs the pair pressures by 1/2, so the same tank settles at twice the pressure.
+/// depth within the case's 5 % (measured 0.017) and the fluid is at rest (0.0024 of
+/// sqrt(g D)); Eq. (7) as printed weighs the pair pressures by 1/2, so the same tank settles
+/// at twice the pressure (measured 2.006).
 #[test]
 fn the_hydrostatic_tank_holds_rho0_g_depth_and_eq7_doubles_it() {
     let full = hydrostatic::simulate(&Tank::new(10, PressureGradient::Full)).expect("stable");
