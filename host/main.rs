@@ -127,8 +127,9 @@ enum Command {
         out: PathBuf,
     },
     /// Compare coil with published references (start-up Poiseuille flow against Morris et al.
-    /// 1997 with both viscosity operators, steady Poiseuille flow of Cross fluids), print each
-    /// error next to its tolerance, and write PNG plots of simulated against reference profiles.
+    /// 1997 with both viscosity operators, steady Poiseuille flow of Cross fluids, a hydrostatic
+    /// tank, the Taylor-Green vortex, the spreading torus of Fig. 3), print each error next to
+    /// its tolerance, and write PNG plots of simulated against reference profiles.
     Validate {
         /// Coarser resolutions only (seconds instead of minutes).
         #[arg(long)]
@@ -146,7 +147,7 @@ enum Command {
     /// and wall time per trial; writes tradeoff.md, tradeoff.csv and tradeoff.png (error against
     /// time, the Pareto front drawn).
     Tradeoff {
-        /// A few coarse trials (under a minute) instead of the full sweep (about 10 minutes).
+        /// A few coarse trials (under a minute) instead of the full sweep (about 8 minutes).
         #[arg(long)]
         quick: bool,
         /// Output folder.

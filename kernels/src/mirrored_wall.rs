@@ -31,10 +31,10 @@ pub struct FluidSample<R> {
 /// The fluid at a point `x` (m) from the fluid particles within h of it. Velocity: a linear fit
 /// weighted by poly6 (moving least squares), exact for linear fields, so one-sided neighbors
 /// next to a wall do not bias it; the kernel-weighted mean (Shepard) where the neighbors are
-/// too flat for a fit. Pressure: the kernel-weighted mean, never extrapolated: a fit reaches
-/// beyond the fluid's values, and walls that answer a pressure wave with more than it brought
-/// feed it (measured: a channel at Mach 1e-4 blew up). Rest at zero pressure where there is no
-/// fluid.
+/// too flat for a fit. Pressure: the kernel-weighted mean, which stays within the fluid's
+/// values where a fit could overshoot them, so a wall never answers a pressure wave with more
+/// than it brought (the tank measured the same with either). Rest at zero pressure where there
+/// is no fluid.
 #[inline(always)]
 pub fn fluid_at<R: Real, T: Topology>(
     x: [f64; 3],
