@@ -5,7 +5,7 @@
 //! GPU steps are the intervals between CUDA events recorded on the stream between steps, with
 //! nothing waiting in between, so they are what a long run achieves per step.
 
-use crate::model::{with_model, Model, WithModel};
+use crate::model::{with_precision_and_model, Model, WithModel};
 use crate::run::{StepStop, Stepping};
 use crate::scene::{Precision, Scene};
 use crate::scene_override::{apply, Override};
@@ -336,10 +336,7 @@ pub fn bench(options: &BenchOptions, mut progress: impl FnMut(&Measurement)) -> 
                     #[cfg(feature = "cuda")]
                     bandwidth: gpu_bandwidth,
                 };
-                let (result, returned) = match precision {
-                    Precision::F32 => with_model::<f32, _>(&scene, work),
-                    Precision::F64 => with_model::<f64, _>(&scene, work),
-                };
+                let (result, returned) = with_precision_and_model(precision, &scene, work);
                 if returned.is_some() {
                     gpu = returned;
                 }

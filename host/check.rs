@@ -2,7 +2,7 @@
 //! limiting term, memory, and a wall-time estimate from a short calibration run on this machine.
 
 use crate::inlet::Inlet;
-use crate::model::{with_model, Model, WithModel};
+use crate::model::{with_precision_and_model, Model, WithModel};
 use crate::scene::{Boundary, Domain, FluidBlock, Precision, Scene, SceneError};
 use crate::setup::{initial_particles, InitialParticles};
 use crate::simulation::Simulation;
@@ -164,10 +164,7 @@ pub fn check(scene: &Scene, file: &str, precision: Option<Precision>, calibratio
     let initial = initial_particles(scene, file)?;
     let precision = precision.unwrap_or(scene.simulation.precision);
     // The run as `coil run` sets it up: its inlets, capacity, time stepper and memory.
-    let plan = match precision {
-        Precision::F32 => with_model::<f32, _>(scene, Plan { scene, initial: &initial }),
-        Precision::F64 => with_model::<f64, _>(scene, Plan { scene, initial: &initial }),
-    };
+    let plan = with_precision_and_model(precision, scene, Plan { scene, initial: &initial });
     let (inlets, capacity) = (&plan.inlets, plan.fluid_capacity);
     // Eq. (10) from the scene's own f64 values: an f32 run rounds nu0 first, which moves its
     // bound in the eighth digit.
@@ -194,10 +191,7 @@ pub fn check(scene: &Scene, file: &str, precision: Option<Precision>, calibratio
         (scene, &initial)
     };
     let work = Calibrate { scene: calibrated_scene, initial: calibrated_initial, wall: calibration };
-    let (seconds_per_particle_step, calibration_steps) = match precision {
-        Precision::F32 => with_model::<f32, _>(calibrated_scene, work),
-        Precision::F64 => with_model::<f64, _>(calibrated_scene, work),
-    };
+    let (seconds_per_particle_step, calibration_steps) = with_precision_and_model(precision, calibrated_scene, work);
     Ok(Report {
         initial_fluid: initial.fluid.len(),
         boundary: initial.boundary.len(),

@@ -3,7 +3,7 @@
 //! GPU kernels of a run contain only the physics it uses.
 
 use crate::parallel::launch;
-use crate::scene::{Scene, Viscosity, ViscosityOperator};
+use crate::scene::{Precision, Scene, Viscosity, ViscosityOperator};
 use coil_kernels::acceleration::{acceleration_pass, AccelerationArgs, StressDivergence, VelocityLaplacian, ViscousOperator};
 use coil_kernels::cell_grid::Neighborhood;
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
@@ -73,6 +73,14 @@ pub fn with_model<R: Real, W: WithModel>(scene: &Scene, work: W) -> W::Output {
         (ViscosityOperator::Laplacian, _) => work.with::<R, _>(LaplacianModel(Newtonian { nu0 })),
         (ViscosityOperator::Stress, true) => work.with::<R, _>(StressModel(Newtonian { nu0 })),
         (ViscosityOperator::Stress, false) => work.with::<R, _>(StressModel(cross_law(v))),
+    }
+}
+
+/// [`with_model`] in `precision`: the float type and the physics variant, both picked once.
+pub fn with_precision_and_model<W: WithModel>(precision: Precision, scene: &Scene, work: W) -> W::Output {
+    match precision {
+        Precision::F32 => with_model::<f32, _>(scene, work),
+        Precision::F64 => with_model::<f64, _>(scene, work),
     }
 }
 

@@ -2,7 +2,7 @@
 //! as it goes.
 
 use crate::frame::Frame;
-use crate::model::{with_model, Model, WithModel};
+use crate::model::{with_precision_and_model, Model, WithModel};
 use crate::output::vtu::{encode, Field, Series};
 use crate::output::write_atomically;
 use crate::preview::{own_range, render, speeds, Coloring, View};
@@ -168,10 +168,7 @@ pub fn run(scene: &Scene, scene_file: &str, options: &RunOptions) -> Result<Summ
     log.scene.simulation.precision = precision;
     let log_path = options.out_dir.join("run.json");
     log.write(&options.out_dir).map_err(|e| io_error("run log", &log_path, e))?;
-    let result = match precision {
-        Precision::F32 => with_model::<f32, _>(scene, Drive { scene, initial: &initial, options, device }),
-        Precision::F64 => with_model::<f64, _>(scene, Drive { scene, initial: &initial, options, device }),
-    };
+    let result = with_precision_and_model(precision, scene, Drive { scene, initial: &initial, options, device });
     (log.status, log.diagnosis, log.summary) = match &result {
         Ok(summary) => ("completed", None, Some(summary.clone())),
         Err(RunError::Unstable(i, summary)) => ("unstable", Some(i.to_string()), Some(summary.clone())),

@@ -7,6 +7,7 @@
 //! ten periods of the tank's slowest acoustic mode instead, so the fluid compresses almost
 //! quasi-statically, then holds it for five more periods before comparing.
 
+use super::scene_word;
 use super::snapshot::{snapshots, Snapshot};
 use crate::scene::{PressureGradient, Scene};
 use std::f64::consts::PI;
@@ -23,6 +24,8 @@ pub struct Tank {
 
 /// |g| (m/s^2).
 const GRAVITY: f64 = 9.81;
+/// rho0 (kg/m^3).
+const REST_DENSITY: f64 = 1000.0;
 
 impl Tank {
     pub fn new(layers: usize, gradient: PressureGradient) -> Self {
@@ -41,6 +44,11 @@ impl Tank {
     /// The period of the slowest acoustic mode, a quarter wave over the depth (s).
     pub fn acoustic_period(&self) -> f64 {
         4.0 * self.depth_m / self.sound_speed()
+    }
+
+    /// rho0 g (Pa/m): the hydrostatic pressure per metre of depth.
+    pub fn rho0_g(&self) -> f64 {
+        REST_DENSITY * GRAVITY
     }
 
     /// Gravity rises as (1 - cos) / 2 over this time (s).
@@ -66,15 +74,12 @@ impl Tank {
         let s = self.spacing();
         let (d, c) = (self.depth_m, self.sound_speed());
         let nu = 0.25 * s * c;
-        let gradient = match self.gradient {
-            PressureGradient::Paper => "paper",
-            PressureGradient::Full => "full",
-        };
+        let gradient = scene_word(self.gradient);
         let text = format!(
             r#"
 name = "hydrostatic_tank"
 [material]
-rest_density_kg_m3 = 1000.0
+rest_density_kg_m3 = {rho0:e}
 sound_speed_m_s = {c:e}
 clamp_negative_pressure = true
 pressure_gradient = "{gradient}"
@@ -100,6 +105,7 @@ min_m = [0.0, 0.0, 0.0]
 max_m = [{d:e}, {d:e}, {d:e}]
 "#,
             g = -GRAVITY,
+            rho0 = REST_DENSITY,
             lo = -4.0 * s,
             hi = d + 4.0 * s,
             top = 1.5 * d,
@@ -135,7 +141,7 @@ pub fn simulate(tank: &Tank) -> Result<TankResult, String> {
     let scene = tank.scene();
     let gravity = |t: f64| tank.gravity(t);
     let snapshot = snapshots(&scene, &[tank.end_s()], Some(&gravity))?.remove(0);
-    let rho0_g = scene.material.rest_density_kg_m3 * GRAVITY;
+    let rho0_g = tank.rho0_g();
     let s = tank.spacing();
     let surface = snapshot.position.iter().map(|x| x[1]).fold(f64::MIN, f64::max) + 0.5 * s;
     // Per layer: particles, sum of depths, sum of pressures.

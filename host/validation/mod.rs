@@ -45,6 +45,15 @@ fn operator_name(op: ViscosityOperator) -> &'static str {
     }
 }
 
+/// How a scene file spells `value` (`"stress"`, `"f64"`, `"mirrored"`): the serde name the
+/// scene parser reads, so generated scenes cannot drift from it.
+fn scene_word<T: serde::Serialize>(value: T) -> String {
+    match toml::Value::try_from(value) {
+        Ok(toml::Value::String(word)) => word,
+        other => unreachable!("scene enums serialise as strings, got {other:?}"),
+    }
+}
+
 /// One sampled time: its label, the simulated (y, u) points and the reference curve.
 type ProfileSample = (String, Vec<[f64; 2]>, Vec<[f64; 2]>);
 
@@ -182,7 +191,7 @@ pub fn hydrostatic_tank(layers: usize, out: Option<&Path>) -> Result<Vec<CaseRes
         .map(|dir| {
             let d = tank.depth_m;
             let surface = r.surface_m;
-            let rho0_g = 1000.0 * 9.81;
+            let rho0_g = tank.rho0_g();
             let points =
                 r.snapshot.position.iter().zip(&r.snapshot.pressure).map(|(x, p)| [(surface - x[1]) / d, p / (rho0_g * d)]);
             let chart = Chart {

@@ -3,6 +3,7 @@
 //! series solution, and the steady flow of a Cross fluid against the profile integrated from
 //! its exact shear stress.
 
+use super::scene_word;
 use super::snapshot::snapshots;
 use crate::scene::{Precision, Scene, ViscosityOperator, Walls};
 use std::f64::consts::PI;
@@ -77,18 +78,7 @@ impl Channel {
     pub fn scene(&self, end_time_s: f64) -> Scene {
         let s = self.spacing();
         let (l, w) = (self.gap_m, 6.0 * s);
-        let operator = match self.operator {
-            ViscosityOperator::Stress => "stress",
-            ViscosityOperator::Laplacian => "laplacian",
-        };
-        let precision = match self.precision {
-            Precision::F32 => "f32",
-            Precision::F64 => "f64",
-        };
-        let walls = match self.walls {
-            Walls::Paper => "paper",
-            Walls::Mirrored => "mirrored",
-        };
+        let (operator, precision, walls) = (scene_word(self.operator), scene_word(self.precision), scene_word(self.walls));
         let cross = self
             .cross
             .map(|c| format!("nu_inf_m2_s = {:e}\ncross_k_s = {:e}\ncross_n = {:e}\n", c.nu_inf_m2_s, c.k_s, c.n))

@@ -1,8 +1,8 @@
 //! Runs a validation scene on the CPU and samples its fluid at given times, in f64 whatever the
 //! run's precision, so each case compares plain numbers with its reference.
 
-use crate::model::{with_model, Model, WithModel};
-use crate::scene::{Precision, Scene};
+use crate::model::{with_precision_and_model, Model, WithModel};
+use crate::scene::Scene;
 use crate::setup::{initial_particles, InitialParticles};
 use crate::simulation::Simulation;
 use coil_kernels::density::pressure;
@@ -47,11 +47,7 @@ pub fn snapshots_from(
     gravity: Option<GravitySchedule>,
 ) -> Result<Vec<Snapshot>, String> {
     let run = Sample { scene, initial, times, gravity };
-    let result = match scene.simulation.precision {
-        Precision::F32 => with_model::<f32, _>(scene, run),
-        Precision::F64 => with_model::<f64, _>(scene, run),
-    };
-    result.map_err(|e| format!("{}: {e}", scene.name))
+    with_precision_and_model(scene.simulation.precision, scene, run).map_err(|e| format!("{}: {e}", scene.name))
 }
 
 struct Sample<'a> {

@@ -2,6 +2,7 @@
 //! domain periodic along x, y and z. Its velocity decays as exp(-2 nu k^2 t) = exp(-8 pi^2 nu t
 //! / L^2) exactly (Taylor & Green 1937), whatever the Reynolds number.
 
+use super::scene_word;
 use super::snapshot::{snapshots_from, Snapshot};
 use crate::scene::{Scene, ViscosityOperator};
 use crate::setup::initial_particles;
@@ -44,10 +45,7 @@ impl Vortex {
     pub fn scene(&self) -> Scene {
         let s = self.period_m / self.across as f64;
         let (l, w) = (self.period_m, 6.0 * s);
-        let operator = match self.operator {
-            ViscosityOperator::Stress => "stress",
-            ViscosityOperator::Laplacian => "laplacian",
-        };
+        let operator = scene_word(self.operator);
         let text = format!(
             r#"
 name = "taylor_green"
