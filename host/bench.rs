@@ -5,7 +5,7 @@
 //! GPU steps are the intervals between CUDA events recorded on the stream between steps, with
 //! nothing waiting in between, so they are what a long run achieves per step.
 
-use crate::model::{with_precision_and_model, Model, WithModel};
+use crate::model::{with_precision_and_model, Model, ModelFields, WithModel};
 use crate::run::{StepStop, Stepping};
 use crate::scene::{Precision, Scene};
 use crate::scene_override::{apply, Override};
@@ -262,7 +262,7 @@ fn gpu_measurement<R: Real, M: Model<R>>(
                 ms_per_step: k.total_ms * per_step,
             })
             .collect();
-        let bytes_moved = compulsory_bytes(std::mem::size_of::<R>(), M::USES_STRESS, particles as f64, cells);
+        let bytes_moved = compulsory_bytes(std::mem::size_of::<R>(), M::FIELDS, particles as f64, cells);
         let (median_ms, p10_ms, p90_ms) = percentiles(times);
         Ok(Measurement {
             backend: BenchBackend::Cuda,
@@ -282,19 +282,21 @@ fn gpu_measurement<R: Real, M: Model<R>>(
 /// caches: every per-particle array each pass reads or writes, once. `real` is the size of the
 /// physics precision; positions are always f64. Neighbours' reads hit the caches after the sort
 /// and are not counted, which makes this a floor.
-pub fn compulsory_bytes(real: usize, stress: bool, particles: f64, cells: f64) -> f64 {
+pub fn compulsory_bytes(real: usize, fields: ModelFields, particles: f64, cells: f64) -> f64 {
     let (p, r) = (24.0, real as f64);
     let hash = p + 4.0;
     let histogram_and_scatter = 4.0 + 4.0 + 4.0;
     // Gathers position, velocity, half-step velocity and id through the order array.
     let reorder = 2.0 * (p + 6.0 * r + 4.0) + 4.0;
     let density = p + r;
-    let stress_pass = if stress { p + 4.0 * r + 6.0 * r } else { 0.0 };
-    let acceleration = p + 4.0 * r + if stress { 6.0 * r } else { 0.0 } + 3.0 * r;
+    // Positions, velocity and density read; stress or viscosity written, then read.
+    let stress_pass = if fields.stress { p + 4.0 * r + 6.0 * r } else { 0.0 };
+    let viscosity_pass = if fields.viscosity { p + 4.0 * r + r } else { 0.0 };
+    let acceleration = p + 4.0 * r + if fields.stress { 6.0 * r } else { 0.0 } + if fields.viscosity { r } else { 0.0 } + 3.0 * r;
     let leapfrog = 2.0 * (p + 6.0 * r);
     // Counters cleared, counted and scanned; cell starts written and read.
     let grid = 4.0 * 4.0;
-    particles * (hash + histogram_and_scatter + reorder + density + stress_pass + acceleration + leapfrog) + cells * grid
+    particles * (hash + histogram_and_scatter + reorder + density + stress_pass + viscosity_pass + acceleration + leapfrog) + cells * grid
 }
 
 /// The CPU's model name and the worker threads, for the report.

@@ -1,22 +1,27 @@
 //! The physics variant of a run, chosen once from the scene: the paper's stress operator with a
-//! Newtonian or Cross rheology, or Müller's Laplacian. Each is a type, so the CPU loops and the
-//! GPU kernels of a run contain only the physics it uses.
+//! Newtonian or Cross rheology, Müller's Laplacian (Newtonian), or Morris's operator with a
+//! constant viscosity or a shear-thinning one per particle. Each is a type, so the CPU loops and the GPU kernels of
+//! a run contain only the physics it uses.
 
 use crate::parallel::launch;
+pub use crate::particles::ModelFields;
 use crate::scene::{Precision, Scene, Viscosity, ViscosityOperator};
-use coil_kernels::acceleration::{acceleration_pass, AccelerationArgs, StressDivergence, VelocityLaplacian, ViscousOperator};
+use coil_kernels::acceleration::{
+    acceleration_pass, AccelerationArgs, MorrisViscosity, StressDivergence, VelocityLaplacian, ViscousOperator,
+};
 use coil_kernels::cell_grid::Neighborhood;
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::topology::{Open, Topology};
+use coil_kernels::shear_viscosity::{shear_viscosity_pass, ShearViscosityArgs};
 use coil_kernels::velocity_gradient::{stress_pass, StressArgs};
-use coil_kernels::view::{SymTensorViewMut, Vec3View, Vec3ViewMut, View};
+use coil_kernels::view::{SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::Real;
 
 /// A viscosity operator and law, fixed for a run.
 pub trait Model<R: Real>: Copy + Send + Sync + 'static {
-    /// Whether the run stores a stress tensor per particle.
-    const USES_STRESS: bool;
+    /// The per-particle arrays the run allocates beyond the particles' state.
+    const FIELDS: ModelFields;
     /// Kinematic viscosity (m^2/s) at a shear rate (1/s), for output.
     fn viscosity(&self, shear_rate: R) -> R;
     /// Largest viscosity the run can reach (m^2/s), for the Eq. (10) bound.
@@ -34,14 +39,17 @@ pub struct ParticleState<'a, R, T = Open> {
     pub id: View<'a, u32>,
     pub velocity: Vec3View<'a, R>,
     pub density: View<'a, R>,
-    /// Present when the model uses stress (`Model::USES_STRESS`).
+    /// Present when the model uses stress (`Model::FIELDS`).
     pub stress: Option<SymTensorViewMut<'a, R>>,
+    /// Present when the model uses a viscosity per particle (`Model::FIELDS`).
+    pub viscosity: Option<ViewMut<'a, R>>,
     pub acceleration: Vec3ViewMut<'a, R>,
 }
 
 /// A backend's way of running the kernels whose arguments depend on the model.
 pub trait Passes<R: Real> {
     fn stress<Rh: Rheology<R>, T: Topology>(&mut self, args: StressArgs<'_, R, Rh, T>);
+    fn shear_viscosity<Rh: Rheology<R>, T: Topology>(&mut self, args: ShearViscosityArgs<'_, R, Rh, T>);
     fn acceleration<Op: ViscousOperator<R>, T: Topology>(&mut self, args: AccelerationArgs<'_, R, Op, T>);
 }
 
@@ -53,6 +61,9 @@ pub struct CpuPasses {
 impl<R: Real> Passes<R> for CpuPasses {
     fn stress<Rh: Rheology<R>, T: Topology>(&mut self, args: StressArgs<'_, R, Rh, T>) {
         launch(self.n, |i| stress_pass(i, &args));
+    }
+    fn shear_viscosity<Rh: Rheology<R>, T: Topology>(&mut self, args: ShearViscosityArgs<'_, R, Rh, T>) {
+        launch(self.n, |i| shear_viscosity_pass(i, &args));
     }
     fn acceleration<Op: ViscousOperator<R>, T: Topology>(&mut self, args: AccelerationArgs<'_, R, Op, T>) {
         launch(self.n, |i| acceleration_pass(i, &args));
@@ -71,6 +82,8 @@ pub fn with_model<R: Real, W: WithModel>(scene: &Scene, work: W) -> W::Output {
     let nu0 = R::from_f64(v.nu0_m2_s);
     match (v.operator, v.is_newtonian()) {
         (ViscosityOperator::Laplacian, _) => work.with::<R, _>(LaplacianModel(Newtonian { nu0 })),
+        (ViscosityOperator::Morris, true) => work.with::<R, _>(MorrisModel(Newtonian { nu0 })),
+        (ViscosityOperator::Morris, false) => work.with::<R, _>(ShearThinningMorrisModel(cross_law(v))),
         (ViscosityOperator::Stress, true) => work.with::<R, _>(StressModel(Newtonian { nu0 })),
         (ViscosityOperator::Stress, false) => work.with::<R, _>(StressModel(cross_law(v))),
     }
@@ -102,8 +115,17 @@ pub struct StressModel<Rh>(pub Rh);
 #[derive(Clone, Copy, Debug)]
 pub struct LaplacianModel<R>(pub Newtonian<R>);
 
+/// Morris, Fox & Zhu 1997's operator with a constant viscosity nu0.
+#[derive(Clone, Copy, Debug)]
+pub struct MorrisModel<R>(pub Newtonian<R>);
+
+/// Morris, Fox & Zhu 1997's operator with each particle's viscosity from rheology `Rh` at its
+/// shear rate (Eq. (8), (2), (3)).
+#[derive(Clone, Copy, Debug)]
+pub struct ShearThinningMorrisModel<Rh>(pub Rh);
+
 impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for StressModel<Rh> {
-    const USES_STRESS: bool = true;
+    const FIELDS: ModelFields = ModelFields { stress: true, viscosity: false };
     fn viscosity(&self, shear_rate: R) -> R {
         self.0.viscosity(shear_rate)
     }
@@ -132,7 +154,7 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for StressModel<Rh> {
 }
 
 impl<R: Real> Model<R> for LaplacianModel<R> {
-    const USES_STRESS: bool = false;
+    const FIELDS: ModelFields = ModelFields { stress: false, viscosity: false };
     fn viscosity(&self, shear_rate: R) -> R {
         self.0.viscosity(shear_rate)
     }
@@ -144,6 +166,55 @@ impl<R: Real> Model<R> for LaplacianModel<R> {
             neighborhood: s.neighborhood,
             fluid: s.fluid,
             viscous: VelocityLaplacian { nu0: self.0.nu0, velocity: s.velocity },
+            id: s.id,
+            density: s.density,
+            acceleration: s.acceleration,
+        });
+    }
+}
+
+impl<R: Real> Model<R> for MorrisModel<R> {
+    const FIELDS: ModelFields = ModelFields { stress: false, viscosity: false };
+    fn viscosity(&self, shear_rate: R) -> R {
+        self.0.viscosity(shear_rate)
+    }
+    fn max_viscosity(&self) -> R {
+        self.0.max_viscosity()
+    }
+    fn accelerations<B: Passes<R>, T: Topology>(&self, backend: &mut B, s: ParticleState<'_, R, T>) {
+        backend.acceleration(AccelerationArgs {
+            neighborhood: s.neighborhood,
+            fluid: s.fluid,
+            viscous: MorrisViscosity { velocity: s.velocity, viscosity: self.0 },
+            id: s.id,
+            density: s.density,
+            acceleration: s.acceleration,
+        });
+    }
+}
+
+impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for ShearThinningMorrisModel<Rh> {
+    const FIELDS: ModelFields = ModelFields { stress: false, viscosity: true };
+    fn viscosity(&self, shear_rate: R) -> R {
+        self.0.viscosity(shear_rate)
+    }
+    fn max_viscosity(&self) -> R {
+        self.0.max_viscosity()
+    }
+    fn accelerations<B: Passes<R>, T: Topology>(&self, backend: &mut B, s: ParticleState<'_, R, T>) {
+        let viscosity = s.viscosity.expect("the shear-thinning Morris operator allocates viscosity");
+        backend.shear_viscosity(ShearViscosityArgs {
+            neighborhood: s.neighborhood,
+            fluid: s.fluid,
+            rheology: self.0,
+            velocity: s.velocity,
+            density: s.density,
+            viscosity,
+        });
+        backend.acceleration(AccelerationArgs {
+            neighborhood: s.neighborhood,
+            fluid: s.fluid,
+            viscous: MorrisViscosity { velocity: s.velocity, viscosity: viscosity.read() },
             id: s.id,
             density: s.density,
             acceleration: s.acceleration,

@@ -3,6 +3,15 @@
 use coil_kernels::view::{SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::Real;
 
+/// The per-particle arrays a physics variant needs beyond the particles' state.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ModelFields {
+    /// Shear stress tau, six components (the paper's operator).
+    pub stress: bool,
+    /// Kinematic viscosity nu(D) (the shear-thinning Laplacian).
+    pub viscosity: bool,
+}
+
 /// Every per-particle array of a run. Arrays hold `capacity` entries; the first `len` are live.
 /// Boundary particles come first by id (ids below `boundary_count`), but after the first sort
 /// they are interleaved with the fluid in cell order.
@@ -23,6 +32,8 @@ pub struct Particles<R> {
     pub acceleration: [Vec<R>; 3],
     /// Shear stress tau (Pa): xx, yy, zz, xy, xz, yz. Allocated only for the paper's operator.
     pub stress: Option<[Vec<R>; 6]>,
+    /// Kinematic viscosity nu(D) (m^2/s). Allocated only for the shear-thinning Laplacian.
+    pub viscosity: Option<Vec<R>>,
     /// Targets of the reorder, swapped with the field they receive.
     pub(crate) scratch_f64: Vec<f64>,
     pub(crate) scratch_real: Vec<R>,
@@ -34,7 +45,7 @@ fn zeros<T: Clone + Default>(n: usize) -> Vec<T> {
 }
 
 impl<R: Real> Particles<R> {
-    pub fn with_capacity(capacity: usize, with_stress: bool) -> Self {
+    pub fn with_capacity(capacity: usize, fields: ModelFields) -> Self {
         Self {
             len: 0,
             capacity,
@@ -44,7 +55,8 @@ impl<R: Real> Particles<R> {
             id: zeros(capacity),
             density: zeros(capacity),
             acceleration: [zeros(capacity), zeros(capacity), zeros(capacity)],
-            stress: with_stress.then(|| core::array::from_fn(|_| zeros(capacity))),
+            stress: fields.stress.then(|| core::array::from_fn(|_| zeros(capacity))),
+            viscosity: fields.viscosity.then(|| zeros(capacity)),
             scratch_f64: zeros(capacity),
             scratch_real: zeros(capacity),
             scratch_u32: zeros(capacity),
@@ -89,8 +101,9 @@ impl<R: Real> Particles<R> {
         let position = 3 * 8;
         let velocities_and_acceleration = 3 * 3 * r;
         let stress = if self.stress.is_some() { 6 * r } else { 0 };
+        let viscosity = if self.viscosity.is_some() { r } else { 0 };
         let scratch = 8 + r + 4;
-        position + velocities_and_acceleration + 4 + r + stress + scratch
+        position + velocities_and_acceleration + 4 + r + stress + viscosity + scratch
     }
 
     pub fn position_view(&self) -> Vec3View<'_, f64> {

@@ -136,6 +136,9 @@ pub enum ViscosityOperator {
     Stress,
     /// Müller et al. 2003: nu0 times the viscosity-kernel Laplacian of velocity (Newtonian).
     Laplacian,
+    /// Morris, Fox & Zhu 1997: a Laplacian built on the kernel gradient, times the pair's mean
+    /// viscosity; nu0, or each particle's nu(D) from Eq. (8), (2), (3) for a Cross fluid.
+    Morris,
 }
 
 /// Kinematic viscosities (m^2/s) and the Cross model, Eq. (3).
@@ -497,7 +500,7 @@ impl Scene {
         if v.operator == ViscosityOperator::Laplacian && !v.is_newtonian() {
             return err(
                 "material.viscosity.operator",
-                "the Laplacian operator is Newtonian (nu0 only); set cross_k_s = 0 or use operator = \"stress\"".into(),
+                "the Laplacian operator is Newtonian (nu0 only); set cross_k_s = 0, or use operator = \"morris\" or \"stress\" for a Cross fluid".into(),
             );
         }
 

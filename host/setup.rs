@@ -208,12 +208,12 @@ pub fn calibrated_mass(rest_density: f64, spacing: f64, support_radius: f64) -> 
 ///   spiky kernel gives 0.947 of it at h = 2 s, so Eq. (8) then (9) would see the viscosity
 ///   10 % low), and the pressure force of Eq. (7) uses the same corrected gradient;
 /// - the viscosity-kernel sum of (f_j - f_i) lap W over f = y^2 gives lap f = 2 exactly (the raw
-///   kernel gives 1.957).
+///   kernel gives 1.957), and so does Morris's.
 pub fn calibrated_kernels<R: Real>(rest_density: f64, spacing: f64, support_radius: f64) -> SmoothingKernels<R> {
     let raw = SmoothingKernels::<f64>::new(support_radius);
     let volume = calibrated_mass(rest_density, spacing, support_radius) / rest_density;
     let n = (support_radius / spacing).ceil() as i64;
-    let (mut gradient, mut laplacian) = (0.0, 0.0);
+    let (mut gradient, mut laplacian, mut morris) = (0.0, 0.0, 0.0);
     for k in -n..=n {
         for j in -n..=n {
             for i in -n..=n {
@@ -223,8 +223,9 @@ pub fn calibrated_kernels<R: Real>(rest_density: f64, spacing: f64, support_radi
                 let r_ij = Vec3::new(-(i as f64) * spacing, -y, -(k as f64) * spacing);
                 gradient += volume * y * raw.spiky_gradient(r_ij, r2).y;
                 laplacian += volume * y * y * raw.viscosity_laplacian(r2);
+                morris += volume * y * y * raw.morris_laplacian(r2);
             }
         }
     }
-    SmoothingKernels::<R>::new(support_radius).corrected(1.0 / gradient, 2.0 / laplacian)
+    SmoothingKernels::<R>::new(support_radius).corrected(1.0 / gradient, 2.0 / laplacian, 2.0 / morris)
 }

@@ -103,7 +103,7 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         let inlets: Vec<Inlet> = scene.inlets.iter().map(|c| Inlet::new(c, s, h, mass, mat.rest_density_kg_m3)).collect();
         let fluid_capacity = scene.simulation.max_fluid_particles.unwrap_or(0).max(initial.fluid.len());
         let boundary_count = initial.boundary.len();
-        let mut particles = Particles::with_capacity(boundary_count + fluid_capacity, M::USES_STRESS);
+        let mut particles = Particles::with_capacity(boundary_count + fluid_capacity, M::FIELDS);
         for (k, &x) in initial.boundary.iter().enumerate() {
             particles.push(k as u32, x, [0.0; 3]);
         }
@@ -275,6 +275,7 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             velocity: vec3_view(&p.velocity, n),
             density: View::new(&p.density[..n]),
             stress: p.stress.as_mut().map(|s| stress_view_mut(s, n)),
+            viscosity: p.viscosity.as_mut().map(|v| view_mut(v, n)),
             acceleration: vec3_view_mut(&mut p.acceleration, n),
         };
         self.model.accelerations(&mut CpuPasses { n }, state);

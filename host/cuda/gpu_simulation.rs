@@ -10,7 +10,7 @@
 use super::device_array::{vec3_view, vec3_view_mut, vec3_zeros, DeviceArray, DeviceVec3};
 use super::gpu::{ByValue, CudaError, Gpu};
 use crate::model::{Model, ParticleState, Passes};
-use crate::particles::Particles;
+use crate::particles::{ModelFields, Particles};
 use crate::simulation::{inject, Instability, Simulation};
 use crate::time_step::Limit;
 use coil_kernels::acceleration::{AccelerationArgs, ViscousOperator};
@@ -21,6 +21,7 @@ use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
 use coil_kernels::leapfrog::LeapfrogArgs;
 use coil_kernels::mirrored_wall::MirroredWallArgs;
 use coil_kernels::nozzle::NozzleArgs;
+use coil_kernels::shear_viscosity::ShearViscosityArgs;
 use coil_kernels::topology::{Open, Topology};
 use coil_kernels::velocity_gradient::StressArgs;
 use coil_kernels::view::{SymTensorViewMut, View};
@@ -65,6 +66,7 @@ struct DeviceState<R> {
     density: DeviceArray<R>,
     id: DeviceArray<u32>,
     stress: Option<[DeviceArray<R>; 6]>,
+    viscosity: Option<DeviceArray<R>>,
     scratch_f64: DeviceArray<f64>,
     scratch_real: DeviceArray<R>,
     scratch_u32: DeviceArray<u32>,
@@ -86,8 +88,8 @@ struct DeviceState<R> {
 }
 
 impl<R: Real> DeviceState<R> {
-    fn new(gpu: &Gpu, capacity: usize, buckets: usize, staged: usize, with_stress: bool) -> Result<Self, CudaError> {
-        let stress = if with_stress {
+    fn new(gpu: &Gpu, capacity: usize, buckets: usize, staged: usize, fields: ModelFields) -> Result<Self, CudaError> {
+        let stress = if fields.stress {
             Some([
                 DeviceArray::zeros(gpu, capacity, "stress")?,
                 DeviceArray::zeros(gpu, capacity, "stress")?,
@@ -107,6 +109,7 @@ impl<R: Real> DeviceState<R> {
             density: DeviceArray::zeros(gpu, capacity, "densities")?,
             id: DeviceArray::zeros(gpu, capacity, "ids")?,
             stress,
+            viscosity: if fields.viscosity { Some(DeviceArray::zeros(gpu, capacity, "viscosities")?) } else { None },
             scratch_f64: DeviceArray::zeros(gpu, capacity, "sort scratch")?,
             scratch_real: DeviceArray::zeros(gpu, capacity, "sort scratch")?,
             scratch_u32: DeviceArray::zeros(gpu, capacity, "sort scratch")?,
@@ -134,6 +137,7 @@ impl<R: Real> DeviceState<R> {
             + self.density.bytes()
             + self.id.bytes()
             + self.stress.as_ref().map_or(0, |s| s.iter().map(DeviceArray::bytes).sum())
+            + self.viscosity.as_ref().map_or(0, DeviceArray::bytes)
             + self.scratch_f64.bytes()
             + self.scratch_real.bytes()
             + self.scratch_u32.bytes()
@@ -197,6 +201,9 @@ impl<R: Real> Passes<R> for GpuPasses<'_> {
     fn stress<Rh: Rheology<R>, T: Topology>(&mut self, args: StressArgs<'_, R, Rh, T>) {
         self.run(kernel::<R>("stress", Rh::NAME, T::NAME), args);
     }
+    fn shear_viscosity<Rh: Rheology<R>, T: Topology>(&mut self, args: ShearViscosityArgs<'_, R, Rh, T>) {
+        self.run(kernel::<R>("shear_viscosity", Rh::NAME, T::NAME), args);
+    }
     fn acceleration<Op: ViscousOperator<R>, T: Topology>(&mut self, args: AccelerationArgs<'_, R, Op, T>) {
         self.run(kernel::<R>("acceleration", Op::NAME, T::NAME), args);
     }
@@ -228,7 +235,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         let buckets = host.grid.grid.cell_count() as usize + 1;
         // Four layers of every inlet per step is far above what dt at the Eq. (10) bound brings.
         let staged_capacity = 4 * host.inlets().iter().map(|i| i.layer_size()).sum::<usize>();
-        let mut device = DeviceState::new(&gpu, capacity, buckets, staged_capacity, M::USES_STRESS)?;
+        let mut device = DeviceState::new(&gpu, capacity, buckets, staged_capacity, M::FIELDS)?;
         if let Some(mirror) = &host.wall_mirror {
             let mut on_device = vec3_zeros(&gpu, mirror[0].len(), "wall mirror images")?;
             for a in 0..3 {
@@ -238,7 +245,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         }
         let mut sim = Self {
             bound: host.particles.len(),
-            staged: Particles::with_capacity(staged_capacity, false),
+            staged: Particles::with_capacity(staged_capacity, ModelFields::default()),
             figures: vec![StateFigures::default(); device.figures.len()],
             host,
             gpu,
@@ -321,6 +328,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
             velocity: vec3_view(&d.velocity, n),
             density: d.density.view(n),
             stress: d.stress_view(n),
+            viscosity: d.viscosity.as_ref().map(|v| v.view_mut(n)),
             acceleration: vec3_view_mut(&d.acceleration, n),
         };
         let mut passes = GpuPasses { gpu: &mut self.gpu, count: d.count.view(1), threads: n as u32, result: Ok(()) };

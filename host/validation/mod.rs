@@ -42,6 +42,7 @@ fn operator_name(op: ViscosityOperator) -> &'static str {
     match op {
         ViscosityOperator::Stress => "paper's operator (Eq. 8, 9)",
         ViscosityOperator::Laplacian => "Laplacian operator (Muller 2003)",
+        ViscosityOperator::Morris => "Morris's operator (Morris 1997)",
     }
 }
 
@@ -120,7 +121,7 @@ pub fn startup_poiseuille_in(channel: &Channel, out: Option<&Path>) -> Result<Ca
     let plot = out
         .map(|dir| {
             let name =
-                format!("poiseuille_{}_{across}.png", if op == ViscosityOperator::Stress { "stress" } else { "laplacian" });
+                format!("poiseuille_{}_{across}.png", scene_word(op));
             save_plot(&profile_chart(case.clone(), channel.gap_m, peak, &samples), &dir.join(name))
         })
         .transpose()?;
@@ -138,17 +139,23 @@ pub fn startup_poiseuille_in(channel: &Channel, out: Option<&Path>) -> Result<Ca
     })
 }
 
-/// The steady Poiseuille flow of a Cross fluid (K in s, n), paper's operator, against the
+/// The steady Poiseuille flow of a Cross fluid (K in s, n) with operator `op`, against the
 /// profile integrated from its exact shear stress: L-infinity error over the centre velocity.
-pub fn cross_poiseuille(across: usize, k_s: f64, n: f64, out: Option<&Path>) -> Result<CaseResult, String> {
+pub fn cross_poiseuille(
+    across: usize,
+    op: ViscosityOperator,
+    k_s: f64,
+    n: f64,
+    out: Option<&Path>,
+) -> Result<CaseResult, String> {
     let law = CrossLaw { nu_inf_m2_s: 0.25e-6, k_s, n };
-    cross_poiseuille_in(&Channel { cross: Some(law), ..Channel::morris(across, ViscosityOperator::Stress) }, out)
+    cross_poiseuille_in(&Channel { cross: Some(law), ..Channel::morris(across, op) }, out)
 }
 
 /// [`cross_poiseuille`] in a given channel, whose `cross` must be set.
 pub fn cross_poiseuille_in(channel: &Channel, out: Option<&Path>) -> Result<CaseResult, String> {
     let law = channel.cross.expect("a Cross channel");
-    let (channel, across, k_s, n) = (*channel, channel.across, law.k_s, law.n);
+    let (channel, across, k_s, n, op) = (*channel, channel.across, law.k_s, law.n, channel.operator);
     let started = Instant::now();
     // The slowest mode decays at the rate of nu_inf: 0.75 L^2 / nu_inf leaves e^-30 of it.
     let end = 0.75 * channel.gap_m * channel.gap_m / law.nu_inf_m2_s;
@@ -157,10 +164,10 @@ pub fn cross_poiseuille_in(channel: &Channel, out: Option<&Path>) -> Result<Case
     let reference = cross_steady_velocity(&channel, &law, &ys);
     let centre = cross_steady_velocity(&channel, &law, &[0.5 * channel.gap_m])[0];
     let error = profile.iter().zip(&reference).map(|(p, r)| (p[1] - r).abs()).fold(0.0, f64::max) / centre;
-    let case = format!("steady Cross Poiseuille K = {k_s} s, n = {n}, {across} across");
+    let case = format!("steady Cross Poiseuille K = {k_s} s, n = {n}, {}, {across} across", operator_name(op));
     let plot = out
         .map(|dir| {
-            let path = dir.join(format!("cross_poiseuille_k{k_s}_n{n}_{across}.png"));
+            let path = dir.join(format!("cross_poiseuille_{}_k{k_s}_n{n}_{across}.png", scene_word(op)));
             let curve_y = across_gap(channel.gap_m, 100);
             let curve = curve_y.iter().zip(cross_steady_velocity(&channel, &law, &curve_y)).map(|(&y, u)| [y, u]).collect();
             save_plot(&profile_chart(case.clone(), channel.gap_m, centre, &[("steady".into(), profile.clone(), curve)]), &path)
@@ -265,7 +272,7 @@ pub fn taylor_green(across: usize, op: ViscosityOperator, out: Option<&Path>) ->
                 ],
             };
             let name =
-                format!("taylor_green_{}_{across}.png", if op == ViscosityOperator::Stress { "stress" } else { "laplacian" });
+                format!("taylor_green_{}_{across}.png", scene_word(op));
             save_plot(&chart, &dir.join(name))
         })
         .transpose()?;

@@ -35,18 +35,20 @@ fn operator_word(op: ViscosityOperator) -> &'static str {
     match op {
         ViscosityOperator::Stress => "paper's",
         ViscosityOperator::Laplacian => "Laplacian",
+        ViscosityOperator::Morris => "Morris's",
     }
 }
 
 /// The trials: the start-up case at 20 across with the Laplacian operator as base (10 across
-/// with `quick`), and the Cross case (K = 10 s, n = 0.5, paper's operator) at 10 across.
+/// with `quick`), and the Cross case (K = 10 s, n = 0.5) at 10 across with the paper's
+/// operator as base.
 pub fn trials(quick: bool) -> Vec<Trial> {
     let base_across = if quick { 10 } else { 20 };
     let base = Channel::morris(base_across, ViscosityOperator::Laplacian);
     let mut t = Vec::new();
     let mut add = |case, knob, setting: String, channel| t.push(Trial { case, knob, setting, channel });
     let resolutions: &[usize] = if quick { &[10] } else { &[10, 20, 30] };
-    for op in [ViscosityOperator::Laplacian, ViscosityOperator::Stress] {
+    for op in [ViscosityOperator::Laplacian, ViscosityOperator::Morris, ViscosityOperator::Stress] {
         for &across in resolutions {
             let knob = if across == base_across && op == base.operator { "base" } else { "resolution, operator" };
             add("start-up", knob, format!("{across} across, {} operator", operator_word(op)), Channel::morris(across, op));
@@ -70,6 +72,10 @@ pub fn trials(quick: bool) -> Vec<Trial> {
         let cross = |across| Channel { cross: Some(law), ..Channel::morris(across, ViscosityOperator::Stress) };
         add("Cross", "base", "10 across".into(), cross(10));
         add("Cross", "resolution", "20 across".into(), cross(20));
+        for across in [10, 20] {
+            let morris = Channel { operator: ViscosityOperator::Morris, ..cross(across) };
+            add("Cross", "operator", format!("{across} across, Morris's operator"), morris);
+        }
         add("Cross", "precision", "f32".into(), Channel { precision: Precision::F32, ..cross(10) });
         let c = 0.1 * cross(10).sound_speed_m_s;
         add("Cross", "sound speed", format!("c = {c:.1e} m/s (Mach 0.1)"), Channel { sound_speed_m_s: c, ..cross(10) });

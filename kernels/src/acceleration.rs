@@ -1,6 +1,7 @@
 //! Accelerations (Algorithm 1, lines 14-15): pressure, viscosity and gravity.
 
 use crate::cell_grid::Neighborhood;
+use crate::cross_viscosity::Newtonian;
 use crate::density::pressure;
 use crate::fluid::Fluid;
 use crate::real::Real;
@@ -76,6 +77,63 @@ impl<R: Real> ViscousOperator<R> for VelocityLaplacian<'_, R> {
     fn pair(&self, own: &Vec3<R>, j: usize, density_j: R, r2: R, _grad_w: Vec3<R>, kernels: &SmoothingKernels<R>) -> Vec3<R> {
         let [x, y, z] = self.velocity.at(j);
         (Vec3::new(x, y, z) - *own) * (self.nu0 * kernels.viscosity_laplacian(r2) / density_j)
+    }
+}
+
+/// Where Morris's operator reads a particle's kinematic viscosity (m^2/s): the one constant
+/// of a Newtonian fluid, or the array the shear-viscosity pass wrote.
+pub trait ParticleViscosity<R: Real>: Copy + Send + Sync {
+    /// The operator's name in PTX kernel names (`acceleration_<NAME>_f32`).
+    const OPERATOR_NAME: &'static str;
+    fn at(&self, i: usize) -> R;
+}
+
+impl<R: Real> ParticleViscosity<R> for Newtonian<R> {
+    const OPERATOR_NAME: &'static str = "morris";
+    #[inline(always)]
+    fn at(&self, _i: usize) -> R {
+        self.nu0
+    }
+}
+
+impl<R: Real> ParticleViscosity<R> for View<'_, R> {
+    const OPERATOR_NAME: &'static str = "morris_shear";
+    #[inline(always)]
+    fn at(&self, i: usize) -> R {
+        View::at(self, i)
+    }
+}
+
+/// Morris, Fox & Zhu 1997's operator: sum_j m_j (nu_i + nu_j) / 2 (v_j - v_i) / rho_j F(r),
+/// with Morris's Laplacian weight F (`SmoothingKernels::morris_laplacian`), the kinematic form
+/// of their (mu_i + mu_j) / (rho_i rho_j) sum. With nu from [`crate::shear_viscosity`] it
+/// carries the Cross model: it discretises div(nu grad v), which is (1/rho) div tau wherever nu
+/// varies only across the streamlines (every channel flow) and leaves out grad nu · grad v^T
+/// elsewhere. Unlike Eq. (8) then (9) it has no odd-even null mode, and unlike Müller's kernel
+/// it keeps its lattice calibration as layers slide past each other.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct MorrisViscosity<'a, R, Nu> {
+    /// Velocity at the current full step (m/s).
+    pub velocity: Vec3View<'a, R>,
+    /// Kinematic viscosity (m^2/s).
+    pub viscosity: Nu,
+}
+
+impl<R: Real, Nu: ParticleViscosity<R>> ViscousOperator<R> for MorrisViscosity<'_, R, Nu> {
+    const NAME: &'static str = Nu::OPERATOR_NAME;
+    /// Velocity (m/s) and half the viscosity (m^2/s).
+    type Own = (Vec3<R>, R);
+    #[inline(always)]
+    fn own(&self, i: usize, _density_i: R) -> (Vec3<R>, R) {
+        let [x, y, z] = self.velocity.at(i);
+        (Vec3::new(x, y, z), self.viscosity.at(i) * R::from_f64(0.5))
+    }
+    #[inline(always)]
+    fn pair(&self, own: &(Vec3<R>, R), j: usize, density_j: R, r2: R, _grad_w: Vec3<R>, kernels: &SmoothingKernels<R>) -> Vec3<R> {
+        let [x, y, z] = self.velocity.at(j);
+        let nu_ij = own.1 + self.viscosity.at(j) * R::from_f64(0.5);
+        (Vec3::new(x, y, z) - own.0) * (nu_ij * kernels.morris_laplacian(r2) / density_j)
     }
 }
 

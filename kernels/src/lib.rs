@@ -7,8 +7,9 @@
 //! Per step: [`cell_grid::hash_pass`], the [`counting_sort`] stages and a gather of every
 //! particle field, [`density::density_pass`] (Eq. 5, 6), [`mirrored_wall::mirrored_wall_pass`]
 //! (when the scene asks), [`velocity_gradient::stress_pass`]
-//! (Eq. 8, 2, 3; the paper's operator only), [`acceleration::acceleration_pass`] (Eq. 7, 9 or
-//! Müller's Laplacian, gravity), [`nozzle::nozzle_pass`] (jet scenes only) and
+//! (Eq. 8, 2, 3; the paper's operator only) or [`shear_viscosity::shear_viscosity_pass`]
+//! (Eq. 8, 2, 3; Morris's operator with the Cross model only), [`acceleration::acceleration_pass`] (Eq. 7,
+//! 9, Müller's or Morris's Laplacian, gravity), [`nozzle::nozzle_pass`] (jet scenes only) and
 //! [`leapfrog::leapfrog_pass`]; then [`diagnostics`] guards the run.
 #![no_std]
 #![cfg_attr(target_arch = "nvptx64", feature(abi_ptx, link_llvm_intrinsics, stdarch_nvptx))]
@@ -29,6 +30,7 @@ pub mod leapfrog;
 pub mod mirrored_wall;
 pub mod nozzle;
 pub mod real;
+pub mod shear_viscosity;
 pub mod smoothing;
 pub mod topology;
 pub mod vec3;

@@ -6,7 +6,7 @@
 //! sort drops particles that left the domain on the device: the host launches enough threads
 //! for an upper bound and never waits for the count inside a step.
 
-use crate::acceleration::{acceleration_pass, AccelerationArgs, StressDivergence, VelocityLaplacian};
+use crate::acceleration::{acceleration_pass, AccelerationArgs, MorrisViscosity, StressDivergence, VelocityLaplacian};
 use crate::cell_grid::{hash_pass, HashArgs};
 use crate::counting_sort::{chunk_total, count_particle, gather, scan_chunk, scan_chunk_offsets, scatter, sort_bucket, Counters};
 use crate::cross_viscosity::{Cross, Newtonian};
@@ -15,6 +15,7 @@ use crate::diagnostics::{diagnostics_pass, DiagnosticsArgs, StateFigures};
 use crate::leapfrog::{leapfrog_pass, LeapfrogArgs};
 use crate::mirrored_wall::{mirrored_wall_pass, MirroredWallArgs};
 use crate::nozzle::{nozzle_pass, NozzleArgs};
+use crate::shear_viscosity::{shear_viscosity_pass, ShearViscosityArgs};
 use crate::topology::Open;
 use crate::velocity_gradient::{stress_pass, StressArgs};
 use crate::view::{View, ViewMut};
@@ -73,6 +74,36 @@ per_index_kernel!(
     acceleration_laplacian_f64,
     AccelerationArgs<'static, f64, VelocityLaplacian<'static, f64>>,
     acceleration_pass::<f64, VelocityLaplacian<'static, f64>, Open>
+);
+per_index_kernel!(
+    shear_viscosity_cross_f32,
+    ShearViscosityArgs<'static, f32, Cross<f32>>,
+    shear_viscosity_pass::<f32, Cross<f32>, Open>
+);
+per_index_kernel!(
+    shear_viscosity_cross_f64,
+    ShearViscosityArgs<'static, f64, Cross<f64>>,
+    shear_viscosity_pass::<f64, Cross<f64>, Open>
+);
+per_index_kernel!(
+    acceleration_morris_f32,
+    AccelerationArgs<'static, f32, MorrisViscosity<'static, f32, Newtonian<f32>>>,
+    acceleration_pass::<f32, MorrisViscosity<'static, f32, Newtonian<f32>>, Open>
+);
+per_index_kernel!(
+    acceleration_morris_f64,
+    AccelerationArgs<'static, f64, MorrisViscosity<'static, f64, Newtonian<f64>>>,
+    acceleration_pass::<f64, MorrisViscosity<'static, f64, Newtonian<f64>>, Open>
+);
+per_index_kernel!(
+    acceleration_morris_shear_f32,
+    AccelerationArgs<'static, f32, MorrisViscosity<'static, f32, View<'static, f32>>>,
+    acceleration_pass::<f32, MorrisViscosity<'static, f32, View<'static, f32>>, Open>
+);
+per_index_kernel!(
+    acceleration_morris_shear_f64,
+    AccelerationArgs<'static, f64, MorrisViscosity<'static, f64, View<'static, f64>>>,
+    acceleration_pass::<f64, MorrisViscosity<'static, f64, View<'static, f64>>, Open>
 );
 per_index_kernel!(nozzle_f32, NozzleArgs<'static, f32>, nozzle_pass::<f32>);
 per_index_kernel!(nozzle_f64, NozzleArgs<'static, f64>, nozzle_pass::<f64>);

@@ -111,6 +111,13 @@ impl<'a, T: Copy> ViewMut<'a, T> {
         unsafe { *self.ptr.add(i) }
     }
 
+    /// The same array, read-only: what a later pass reads of what this one wrote.
+    #[inline(always)]
+    pub fn read(&self) -> View<'a, T> {
+        // SAFETY: the array outlives 'a; backends run passes one after another.
+        unsafe { View::from_raw(self.ptr, self.len) }
+    }
+
     /// Writes entry `i`.
     ///
     /// # Safety
