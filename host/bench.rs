@@ -296,7 +296,8 @@ pub fn compulsory_bytes(real: usize, fields: ModelFields, particles: f64, cells:
     let leapfrog = 2.0 * (p + 6.0 * r);
     // Counters cleared, counted and scanned; cell starts written and read.
     let grid = 4.0 * 4.0;
-    particles * (hash + histogram_and_scatter + reorder + density + stress_pass + viscosity_pass + acceleration + leapfrog) + cells * grid
+    particles * (hash + histogram_and_scatter + reorder + density + stress_pass + viscosity_pass + acceleration + leapfrog)
+        + cells * grid
 }
 
 /// The CPU's model name and the worker threads, for the report.

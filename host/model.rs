@@ -12,8 +12,8 @@ use coil_kernels::acceleration::{
 use coil_kernels::cell_grid::Neighborhood;
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
-use coil_kernels::topology::{Open, Topology};
 use coil_kernels::shear_viscosity::{shear_viscosity_pass, ShearViscosityArgs};
+use coil_kernels::topology::{Open, Topology};
 use coil_kernels::velocity_gradient::{stress_pass, StressArgs};
 use coil_kernels::view::{SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::Real;

@@ -69,7 +69,9 @@ fn morris_laplacian_keeps_its_calibration_on_a_sheared_lattice() {
     let k = coil::setup::calibrated_kernels::<f64>(1000.0, s, h);
     let y2 = |_: f64, y: f64, _: f64| y * y;
     let xz = |x: f64, _: f64, z: f64| x * x + z * z;
-    for (name, weight) in [("Morris", &(|r2| k.morris_laplacian(r2)) as &dyn Fn(f64) -> f64), ("Müller", &|r2| k.viscosity_laplacian(r2))] {
+    for (name, weight) in
+        [("Morris", &(|r2| k.morris_laplacian(r2)) as &dyn Fn(f64) -> f64), ("Müller", &|r2| k.viscosity_laplacian(r2))]
+    {
         let on_lattice = lattice_laplacian(s, h, 0.0, y2, weight);
         assert!((on_lattice - 2.0).abs() < 1e-9, "{name}: lap y^2 = {on_lattice}");
         let across = lattice_laplacian(s, h, 0.0, xz, weight);

@@ -113,6 +113,31 @@ fn the_taylor_green_vortex_decays_at_the_exact_rate() {
     assert!(fine.passed() && fine.error < 0.5 * coarse.error, "{} then {}", coarse.error, fine.error);
 }
 
+/// The jet's axis offset reads the centroid of the slab D/2 to 3D/2 above the plate only: a
+/// rope displaced by 0.6 D there reads 0.6 D whatever lies above or below, a symmetric pile
+/// reads 0, and an empty slab reads nothing.
+#[test]
+fn the_jet_axis_offset_reads_the_slab_just_above_the_plate() {
+    use coil::validation::jet::axis_offset;
+    use coil::validation::snapshot::Snapshot;
+    let d = 0.02;
+    let mut rope = Snapshot::default();
+    for k in 0..20 {
+        let y = 0.005 * k as f64;
+        // Displaced by 0.6 D along x inside the slab and by 3 D elsewhere.
+        let x = if (0.5 * d..1.5 * d).contains(&y) { 0.6 * d } else { 3.0 * d };
+        rope.position.extend([[x - 0.001, y, 0.0], [x + 0.001, y, 0.0]]);
+    }
+    let offset = axis_offset(&rope, 0.0, d).expect("fluid in the slab");
+    assert!((offset - 0.6 * d).abs() < 1e-12, "{offset}");
+    let pile = Snapshot {
+        position: vec![[0.03, 0.015, 0.0], [-0.03, 0.015, 0.0], [0.0, 0.015, 0.03], [0.0, 0.015, -0.03]],
+        ..Default::default()
+    };
+    assert!(axis_offset(&pile, 0.0, d).expect("fluid in the slab") < 1e-15);
+    assert_eq!(axis_offset(&Snapshot::default(), 0.0, d), None);
+}
+
 /// `coil tradeoff --quick` writes its table, CSV and plot; of its knobs the paper's walls must
 /// cost accuracy (measured: 0.21 against 0.011 at 10 across) and f32 must not (0.0106 both).
 #[test]

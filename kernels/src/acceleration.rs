@@ -130,7 +130,15 @@ impl<R: Real, Nu: ParticleViscosity<R>> ViscousOperator<R> for MorrisViscosity<'
         (Vec3::new(x, y, z), self.viscosity.at(i) * R::from_f64(0.5))
     }
     #[inline(always)]
-    fn pair(&self, own: &(Vec3<R>, R), j: usize, density_j: R, r2: R, _grad_w: Vec3<R>, kernels: &SmoothingKernels<R>) -> Vec3<R> {
+    fn pair(
+        &self,
+        own: &(Vec3<R>, R),
+        j: usize,
+        density_j: R,
+        r2: R,
+        _grad_w: Vec3<R>,
+        kernels: &SmoothingKernels<R>,
+    ) -> Vec3<R> {
         let [x, y, z] = self.velocity.at(j);
         let nu_ij = own.1 + self.viscosity.at(j) * R::from_f64(0.5);
         (Vec3::new(x, y, z) - own.0) * (nu_ij * kernels.morris_laplacian(r2) / density_j)
