@@ -1,7 +1,7 @@
 //! The physics variant of a run, chosen once from the scene: the paper's stress operator with a
 //! Newtonian or Cross rheology, Müller's Laplacian (Newtonian), or Morris's operator with a
-//! constant viscosity or a shear-thinning one per particle. Each is a type, so the CPU loops and the GPU kernels of
-//! a run contain only the physics it uses.
+//! constant viscosity or a shear-thinning one per particle. Each is a type, so the CPU loops and
+//! the GPU kernels of a run contain only the physics it uses.
 
 use crate::parallel::launch;
 pub use crate::particles::ModelFields;

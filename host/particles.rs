@@ -8,7 +8,7 @@ use coil_kernels::Real;
 pub struct ModelFields {
     /// Shear stress tau, six components (the paper's operator).
     pub stress: bool,
-    /// Kinematic viscosity nu(D) (the shear-thinning Laplacian).
+    /// Kinematic viscosity nu(D) (Morris's operator with a Cross fluid).
     pub viscosity: bool,
 }
 
@@ -32,7 +32,7 @@ pub struct Particles<R> {
     pub acceleration: [Vec<R>; 3],
     /// Shear stress tau (Pa): xx, yy, zz, xy, xz, yz. Allocated only for the paper's operator.
     pub stress: Option<[Vec<R>; 6]>,
-    /// Kinematic viscosity nu(D) (m^2/s). Allocated only for the shear-thinning Laplacian.
+    /// Kinematic viscosity nu(D) (m^2/s). Allocated only for Morris's operator with a Cross fluid.
     pub viscosity: Option<Vec<R>>,
     /// Targets of the reorder, swapped with the field they receive.
     pub(crate) scratch_f64: Vec<f64>,

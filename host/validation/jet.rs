@@ -30,9 +30,9 @@ pub fn axis_offset(snapshot: &Snapshot, plate_y: f64, diameter: f64) -> Option<f
 /// plate, operator `op`, run to `end_time_s`.
 pub fn jet_scene(height_over_d: f64, op: ViscosityOperator, end_time_s: f64) -> Result<(f64, Scene), String> {
     let mut scene = Scene::parse(NEWTONIAN_JET, "scenes/newtonian_jet.toml").map_err(|e| e.to_string())?;
-    let inlet = scene.inlets.first_mut().ok_or("the jet scene has an inlet")?;
+    let inlet = scene.inlets.first_mut().ok_or("the jet scene has no inlet")?;
     let crate::scene::Nozzle::Circle { radius_m } = inlet.nozzle else {
-        return Err("the jet scene's nozzle is round".into());
+        return Err("the jet scene's nozzle is not round".into());
     };
     let diameter = 2.0 * radius_m;
     let height = height_over_d * diameter;

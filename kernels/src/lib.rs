@@ -8,8 +8,9 @@
 //! particle field, [`density::density_pass`] (Eq. 5, 6), [`mirrored_wall::mirrored_wall_pass`]
 //! (when the scene asks), [`velocity_gradient::stress_pass`]
 //! (Eq. 8, 2, 3; the paper's operator only) or [`shear_viscosity::shear_viscosity_pass`]
-//! (Eq. 8, 2, 3; Morris's operator with the Cross model only), [`acceleration::acceleration_pass`] (Eq. 7,
-//! 9, Müller's or Morris's Laplacian, gravity), [`nozzle::nozzle_pass`] (jet scenes only) and
+//! (Eq. 8, 2, 3; Morris's operator with the Cross model only),
+//! [`acceleration::acceleration_pass`] (Eq. 7, 9, Müller's or Morris's Laplacian, gravity),
+//! [`nozzle::nozzle_pass`] (jet scenes only) and
 //! [`leapfrog::leapfrog_pass`]; then [`diagnostics`] guards the run.
 #![no_std]
 #![cfg_attr(target_arch = "nvptx64", feature(abi_ptx, link_llvm_intrinsics, stdarch_nvptx))]
