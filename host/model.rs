@@ -46,6 +46,20 @@ pub struct ParticleState<'a, R, T = Open> {
     pub acceleration: Vec3ViewMut<'a, R>,
 }
 
+impl<'a, R: Real, T: Topology> ParticleState<'a, R, T> {
+    /// The acceleration pass's arguments with viscous operator `viscous`.
+    pub fn acceleration_args<Op: ViscousOperator<R>>(&self, viscous: Op) -> AccelerationArgs<'a, R, Op, T> {
+        AccelerationArgs {
+            neighborhood: self.neighborhood,
+            fluid: self.fluid,
+            viscous,
+            id: self.id,
+            density: self.density,
+            acceleration: self.acceleration,
+        }
+    }
+}
+
 /// A backend's way of running the kernels whose arguments depend on the model.
 pub trait Passes<R: Real> {
     fn stress<Rh: Rheology<R>, T: Topology>(&mut self, args: StressArgs<'_, R, Rh, T>);
@@ -142,14 +156,7 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for StressModel<Rh> {
             density: s.density,
             stress,
         });
-        backend.acceleration(AccelerationArgs {
-            neighborhood: s.neighborhood,
-            fluid: s.fluid,
-            viscous: StressDivergence { stress: stress.read() },
-            id: s.id,
-            density: s.density,
-            acceleration: s.acceleration,
-        });
+        backend.acceleration(s.acceleration_args(StressDivergence { stress: stress.read() }));
     }
 }
 
@@ -162,14 +169,7 @@ impl<R: Real> Model<R> for LaplacianModel<R> {
         self.0.max_viscosity()
     }
     fn accelerations<B: Passes<R>, T: Topology>(&self, backend: &mut B, s: ParticleState<'_, R, T>) {
-        backend.acceleration(AccelerationArgs {
-            neighborhood: s.neighborhood,
-            fluid: s.fluid,
-            viscous: VelocityLaplacian { nu0: self.0.nu0, velocity: s.velocity },
-            id: s.id,
-            density: s.density,
-            acceleration: s.acceleration,
-        });
+        backend.acceleration(s.acceleration_args(VelocityLaplacian { nu0: self.0.nu0, velocity: s.velocity }));
     }
 }
 
@@ -182,14 +182,7 @@ impl<R: Real> Model<R> for MorrisModel<R> {
         self.0.max_viscosity()
     }
     fn accelerations<B: Passes<R>, T: Topology>(&self, backend: &mut B, s: ParticleState<'_, R, T>) {
-        backend.acceleration(AccelerationArgs {
-            neighborhood: s.neighborhood,
-            fluid: s.fluid,
-            viscous: MorrisViscosity { velocity: s.velocity, viscosity: self.0 },
-            id: s.id,
-            density: s.density,
-            acceleration: s.acceleration,
-        });
+        backend.acceleration(s.acceleration_args(MorrisViscosity { velocity: s.velocity, viscosity: self.0 }));
     }
 }
 
@@ -211,13 +204,6 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for ShearThinningMorrisModel<R
             density: s.density,
             viscosity,
         });
-        backend.acceleration(AccelerationArgs {
-            neighborhood: s.neighborhood,
-            fluid: s.fluid,
-            viscous: MorrisViscosity { velocity: s.velocity, viscosity: viscosity.read() },
-            id: s.id,
-            density: s.density,
-            acceleration: s.acceleration,
-        });
+        backend.acceleration(s.acceleration_args(MorrisViscosity { velocity: s.velocity, viscosity: viscosity.read() }));
     }
 }
