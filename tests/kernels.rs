@@ -358,6 +358,46 @@ fn the_mirrored_wall_fit_reproduces_linear_fields_next_to_a_wall() {
     assert_eq!((far.velocity, far.pressure), (Vec3::zero(), 0.0));
 }
 
+/// At the edge of a free surface a mirror image may see a single fluid particle, or a few in a
+/// line: their offsets determine no slope, and the covariance left after removing the mean is
+/// rounding noise. The sample must be their mean velocity, never the noise's inverse (which
+/// was infinite or NaN for a cylinder's rim on a plate).
+#[test]
+fn the_mirrored_wall_fit_falls_back_to_the_mean_of_a_single_neighbor_or_a_line() {
+    use coil::neighbor_grid::NeighborGrid;
+    use coil::particles::{ModelFields, Particles};
+    use coil_kernels::mirrored_wall::fluid_at;
+    use coil_kernels::view::ViewMut;
+    let h = 0.025;
+    let fluid = Fluid { boundary_count: 0, kernels: SmoothingKernels::new(h), ..fluid::<f64>() };
+    let x = [0.0503, 0.0117, 0.0491];
+    for line in [1usize, 3] {
+        for k in 0..2000 {
+            // Offsets of 0.55 h to 0.95 h in many directions, the same direction for a line.
+            let angle = 0.37 * k as f64;
+            let dir = [angle.cos() * 0.6, 0.8 * (1.3 * angle).sin(), angle.sin() * 0.6];
+            let norm = dir.iter().map(|d| d * d).sum::<f64>().sqrt();
+            let mut p = Particles::<f64>::with_capacity(4, ModelFields::default());
+            for m in 0..line {
+                let r = h * (0.55 + 0.4 * ((k * 7 + m * 3) % 10) as f64 / 10.0);
+                p.push(m as u32, [0, 1, 2].map(|a| x[a] + r * dir[a] / norm), [0.0, -0.25, 0.5]);
+            }
+            let mut grid = NeighborGrid::new([-0.05; 3], [0.15; 3], h, [false; 3], p.capacity());
+            grid.sort(&mut p);
+            let n = p.len();
+            let (id, nb) = (p.id.clone(), grid.neighborhood(coil::particles::vec3_view(&p.position, n), Open));
+            let velocity = coil::particles::vec3_view_mut(&mut p.velocity, n);
+            let density = ViewMut::new(&mut p.density);
+            let sample = fluid_at(x, &nb, &View::new(&id), &velocity, &density, &fluid);
+            assert!(
+                (sample.velocity - Vec3::new(0.0, -0.25, 0.5)).norm() < 1e-12,
+                "{line} in a line, direction {k}: {:?}",
+                sample.velocity
+            );
+        }
+    }
+}
+
 #[test]
 fn a_symmetric_solve_inverts_and_refuses_a_flat_tensor() {
     use coil_kernels::vec3::SymTensor;

@@ -77,7 +77,11 @@ pub fn fluid_at<R: Real, T: Topology>(
     let mean_q = w1 * inv_w0;
     let mean_v = v0 * inv_w0;
     let covariance = w2.add(SymTensor::outer(mean_q).scaled(-w0));
-    let velocity = match covariance.solve(mean_q) {
+    // Offsets spread less than 0.03 h about their mean (one neighbor, at a free surface's edge)
+    // leave a covariance of rounding noise, whose inverse is arbitrary; the mean is all they
+    // determine.
+    let spread = covariance.trace() > R::from_f64(1e-3) * w0;
+    let velocity = match covariance.solve(mean_q).filter(|_| spread) {
         Some(u) => {
             let mut centred = v1;
             centred.add_outer(mean_q, -v0);
