@@ -42,6 +42,8 @@ pub struct Scene {
     pub fluid_blocks: Vec<FluidBlock>,
     #[serde(default, rename = "fluid_torus")]
     pub fluid_tori: Vec<FluidTorus>,
+    #[serde(default, rename = "fluid_cylinder")]
+    pub fluid_cylinders: Vec<FluidCylinder>,
     #[serde(default, rename = "boundary")]
     pub boundaries: Vec<Boundary>,
     #[serde(default, rename = "inlet")]
@@ -304,6 +306,19 @@ pub struct FluidTorus {
     pub centre_m: [f64; 3],
     pub major_radius_m: f64,
     pub minor_radius_m: f64,
+    #[serde(default)]
+    pub velocity_m_s: [f64; 3],
+}
+
+/// An upright cylinder of fluid (Huppert's fixed-volume release): the lattice points within
+/// `radius_m` of the vertical axis through `base_centre_m`, from its height up to
+/// `height_m` above it.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FluidCylinder {
+    pub base_centre_m: [f64; 3],
+    pub radius_m: f64,
+    pub height_m: f64,
     #[serde(default)]
     pub velocity_m_s: [f64; 3],
 }
@@ -600,6 +615,15 @@ impl Scene {
                 ([c[0] - reach, c[1] - t.minor_radius_m, c[2] - reach], [c[0] + reach, c[1] + t.minor_radius_m, c[2] + reach]);
             if !inside(lo) || !inside(hi) {
                 return err(&format!("fluid_torus[{k}]"), "lies outside the domain box".into());
+            }
+        }
+        for (k, c) in self.fluid_cylinders.iter().enumerate() {
+            let field = |f: &str| format!("fluid_cylinder[{k}].{f}");
+            positive(&field("radius_m"), c.radius_m)?;
+            positive(&field("height_m"), c.height_m)?;
+            let (b, r) = (c.base_centre_m, c.radius_m);
+            if !inside([b[0] - r, b[1], b[2] - r]) || !inside([b[0] + r, b[1] + c.height_m, b[2] + r]) {
+                return err(&format!("fluid_cylinder[{k}]"), "lies outside the domain box".into());
             }
         }
         for (k, b) in self.boundaries.iter().enumerate() {
