@@ -44,12 +44,12 @@ pub fn jet_scene(height_over_d: f64, op: ViscosityOperator, end_time_s: f64) -> 
     Ok((diameter, scene))
 }
 
-/// The largest sideways offset of the axis over `diameter` (dimensionless), sampled every
-/// 0.02 s until `end_time_s`.
-pub fn largest_axis_offset(height_over_d: f64, op: ViscosityOperator, end_time_s: f64) -> Result<f64, String> {
+/// The sideways offset of the axis over `diameter` (dimensionless) against time (s), sampled
+/// every 0.02 s until `end_time_s` from the first sample with fluid in the slab.
+pub fn axis_offsets(height_over_d: f64, op: ViscosityOperator, end_time_s: f64) -> Result<Vec<[f64; 2]>, String> {
     let (diameter, scene) = jet_scene(height_over_d, op, end_time_s)?;
     let samples = (end_time_s / SAMPLE_EVERY_S).round() as usize;
     let times: Vec<f64> = (1..=samples).map(|k| k as f64 * SAMPLE_EVERY_S).collect();
-    let offsets = snapshots(&scene, &times, None)?;
-    Ok(offsets.iter().filter_map(|s| axis_offset(s, 0.0, diameter)).fold(0.0, f64::max) / diameter)
+    let snaps = snapshots(&scene, &times, None)?;
+    Ok(snaps.iter().filter_map(|s| axis_offset(s, 0.0, diameter).map(|o| [s.time_s, o / diameter])).collect())
 }

@@ -1,0 +1,173 @@
+//! Viscous spreading of a fixed volume under gravity (Huppert 1982, J. Fluid Mech. 121): an
+//! upright cylinder of Newtonian fluid released on a no-slip plane spreads, once thin, as the
+//! similarity solution r_N(t) = 0.894 (g V^3 t / (3 nu))^(1/8).
+
+use super::scene_word;
+use super::snapshot::{snapshots, Snapshot};
+use crate::scene::{Scene, ViscosityOperator};
+
+/// |g| (m/s^2).
+const GRAVITY: f64 = 9.81;
+
+/// Huppert's prefactor for the axisymmetric current.
+pub const HUPPERT_PREFACTOR: f64 = 0.894;
+
+/// The release: a cylinder of radius R0 = 0.1 m and height H0 = 0.1 m, nu = 0.05 m^2/s.
+#[derive(Debug, Clone, Copy)]
+pub struct Release {
+    /// R0 (m).
+    pub radius_m: f64,
+    /// H0 (m).
+    pub height_m: f64,
+    /// Particles across R0.
+    pub across: usize,
+    /// nu (m^2/s).
+    pub nu_m2_s: f64,
+    pub operator: ViscosityOperator,
+    /// c (m/s).
+    pub sound_speed_m_s: f64,
+    /// The current is followed until Huppert's radius reaches this many R0.
+    pub final_spread: f64,
+}
+
+impl Release {
+    pub fn new(across: usize, operator: ViscosityOperator) -> Self {
+        Self {
+            radius_m: 0.1,
+            height_m: 0.1,
+            across,
+            // Re = U H / nu is about 0.06 once the radius has grown 1.5 times (`reynolds_at`).
+            nu_m2_s: 0.05,
+            operator,
+            // g H0 / c^2 = 1 %, and the flow stays below Mach 0.05.
+            sound_speed_m_s: 10.0,
+            final_spread: 2.0,
+        }
+    }
+
+    /// The particle spacing (m).
+    pub fn spacing(&self) -> f64 {
+        self.radius_m / self.across as f64
+    }
+
+    /// Huppert's front radius (m) at `t` (s) for a volume `volume_m3`.
+    pub fn huppert_radius(&self, volume_m3: f64, t: f64) -> f64 {
+        HUPPERT_PREFACTOR * (GRAVITY * volume_m3.powi(3) * t / (3.0 * self.nu_m2_s)).powf(0.125)
+    }
+
+    /// The time (s) at which Huppert's radius is `radius_m` (m), for a volume `volume_m3`.
+    pub fn huppert_time(&self, volume_m3: f64, radius_m: f64) -> f64 {
+        (radius_m / HUPPERT_PREFACTOR).powi(8) * 3.0 * self.nu_m2_s / (GRAVITY * volume_m3.powi(3))
+    }
+
+    /// Re = U H / nu of the similarity solution when its radius is `radius_m` (m): U = r / (8 t)
+    /// the front speed and H = V / (pi r^2) the mean thickness.
+    pub fn reynolds_at(&self, volume_m3: f64, radius_m: f64) -> f64 {
+        let speed = radius_m / (8.0 * self.huppert_time(volume_m3, radius_m));
+        speed * volume_m3 / (std::f64::consts::PI * radius_m * radius_m) / self.nu_m2_s
+    }
+
+    /// The scene: the cylinder standing at rest on a mirrored (no-slip) plate at y = 0 that
+    /// reaches 3 R0 from the axis, with the full pressure gradient (the paper's half gradient
+    /// would only double the pressure that holds the fluid up) and clamped negative pressure at
+    /// the free surface.
+    pub fn scene(&self, end_time_s: f64) -> Scene {
+        let (s, r, h) = (self.spacing(), self.radius_m, self.height_m);
+        let reach = 3.0 * r;
+        let text = format!(
+            r#"
+name = "huppert"
+[material]
+rest_density_kg_m3 = 1000.0
+sound_speed_m_s = {c:e}
+clamp_negative_pressure = true
+pressure_gradient = "full"
+particle_spacing_m = {s:e}
+support_radius_factor = 2.0
+gravity_m_s2 = [0.0, {g:e}, 0.0]
+[material.viscosity]
+operator = "{operator}"
+nu0_m2_s = {nu:e}
+[domain]
+min_m = [{lo:e}, {floor:e}, {lo:e}]
+max_m = [{reach:e}, {top:e}, {reach:e}]
+[simulation]
+end_time_s = {end_time_s:e}
+precision = "f64"
+walls = "mirrored"
+[[boundary]]
+shape = "plate"
+height_m = 0.0
+[[fluid_cylinder]]
+base_centre_m = [0.0, 0.0, 0.0]
+radius_m = {r:e}
+height_m = {h:e}
+"#,
+            c = self.sound_speed_m_s,
+            g = -GRAVITY,
+            operator = scene_word(self.operator),
+            nu = self.nu_m2_s,
+            lo = -reach,
+            floor = -4.0 * s,
+            top = 2.0 * h,
+        );
+        Scene::parse(&text, "huppert (generated)").expect("the generated release is a valid scene")
+    }
+}
+
+/// The front radius (m) of an axisymmetric current: sqrt(7/3 <x^2 + z^2>) over the fluid's
+/// particles, each the same volume. Huppert's profile h ~ (1 - r^2 / r_N^2)^(1/3) has
+/// <r^2> = 3/7 r_N^2; the moment weighs every particle, where the outermost ones, a spacing
+/// apart and thinning to one layer at the front, would move the radius in steps.
+pub fn front_radius(snapshot: &Snapshot) -> f64 {
+    let n = snapshot.position.len().max(1) as f64;
+    let mean_r2 = snapshot.position.iter().map(|x| x[0] * x[0] + x[2] * x[2]).sum::<f64>() / n;
+    (7.0 / 3.0 * mean_r2).sqrt()
+}
+
+/// The fit of a run to Huppert's law.
+#[derive(Debug, Clone)]
+pub struct Spreading {
+    /// (t (s), front radius (m)) at each sample.
+    pub radii: Vec<[f64; 2]>,
+    /// V (m^3): the lattice's particles times s^3.
+    pub volume_m3: f64,
+    /// The slope of ln r against ln t over the samples past 1.5 R0 (Huppert: 1/8).
+    pub exponent: f64,
+    /// The median over those samples of r / (g V^3 t / (3 nu))^(1/8) (Huppert: 0.894).
+    pub prefactor: f64,
+    /// Samples in the fit.
+    pub fitted: usize,
+}
+
+/// Runs the release until Huppert's radius is `final_spread` R0, sampling the front at 60
+/// times spaced evenly in ln t over its last three decades, and fits the samples whose radius
+/// has grown past 1.5 R0.
+pub fn simulate(release: &Release) -> Result<Spreading, String> {
+    let probe = release.scene(1.0);
+    let volume_m3 = crate::setup::initial_particles(&probe, &probe.name).map_err(|e| e.to_string())?.fluid.len() as f64
+        * release.spacing().powi(3);
+    let end = release.huppert_time(volume_m3, release.final_spread * release.radius_m);
+    let samples = 60;
+    let times: Vec<f64> = (0..samples).map(|k| end * 1e-3f64.powf(1.0 - k as f64 / (samples - 1) as f64)).collect();
+    let snaps = snapshots(&release.scene(end), &times, None)?;
+    let radii: Vec<[f64; 2]> = snaps.iter().map(|s| [s.time_s, front_radius(s)]).collect();
+    let late: Vec<[f64; 2]> = radii.iter().copied().filter(|p| p[1] >= 1.5 * release.radius_m).collect();
+    if late.len() < 3 {
+        return Err(format!(
+            "huppert: the front reached {:.3} m by t = {end:.3} s, short of the 1.5 R0 = {:.3} m the fit starts at",
+            radii.last().map_or(0.0, |p| p[1]),
+            1.5 * release.radius_m
+        ));
+    }
+    let logs: Vec<[f64; 2]> = late.iter().map(|p| [p[0].ln(), p[1].ln()]).collect();
+    let mean = |k: usize| logs.iter().map(|p| p[k]).sum::<f64>() / logs.len() as f64;
+    let (mx, my) = (mean(0), mean(1));
+    let exponent = logs.iter().map(|p| (p[0] - mx) * (p[1] - my)).sum::<f64>()
+        / logs.iter().map(|p| (p[0] - mx).powi(2)).sum::<f64>();
+    let mut ratios: Vec<f64> =
+        late.iter().map(|p| HUPPERT_PREFACTOR * p[1] / release.huppert_radius(volume_m3, p[0])).collect();
+    ratios.sort_by(f64::total_cmp);
+    let prefactor = ratios[ratios.len() / 2];
+    Ok(Spreading { radii, volume_m3, exponent, prefactor, fitted: late.len() })
+}
