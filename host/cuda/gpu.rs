@@ -33,8 +33,6 @@ pub enum CudaError {
     Launch { kernel: String, error: DriverError },
     /// Any other driver call failed.
     Driver { call: &'static str, error: DriverError },
-    /// The scene uses physics the GPU kernels do not have.
-    Unsupported(String),
 }
 
 impl fmt::Display for CudaError {
@@ -57,7 +55,6 @@ impl fmt::Display for CudaError {
                 "CUDA kernel {kernel} failed: {error} (kernels run asynchronously: set COIL_CUDA_SYNC=1 to name the failing one exactly)"
             ),
             CudaError::Driver { call, error } => write!(f, "CUDA call {call} failed: {error}"),
-            CudaError::Unsupported(what) => f.write_str(what),
         }
     }
 }

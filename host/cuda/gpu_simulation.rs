@@ -226,11 +226,6 @@ pub struct GpuSimulation<R: Real, M: Model<R>> {
 impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
     /// Moves the run `host` (set up and sorted on the host) onto `gpu`.
     pub fn new(host: Simulation<R, M>, gpu: Gpu) -> Result<Self, CudaError> {
-        if host.grid.is_periodic() {
-            return Err(CudaError::Unsupported(
-                "periodic domains (domain.periodic) run on the CPU backend only; use --backend cpu".into(),
-            ));
-        }
         let capacity = host.particles.capacity();
         let buckets = host.grid.grid.cell_count() as usize + 1;
         // Four layers of every inlet per step is far above what dt at the Eq. (10) bound brings.
@@ -317,12 +312,26 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
     pub fn step_with(&mut self, dt: f64, limit: Limit) -> Result<(), GpuStepError> {
         self.inject(dt)?;
         self.sort()?;
-        self.density()?;
-        self.mirrored_walls()?;
+        if self.host.grid.is_periodic() {
+            self.after_sort(self.host.grid.periodic, dt)?;
+        } else {
+            self.after_sort(Open, dt)?;
+        }
+        self.host.advance_clock(dt, limit);
+        if self.host.steps % self.check_every == 0 {
+            self.read_diagnostics()?;
+        }
+        Ok(())
+    }
+
+    /// Lines 5-19, after the sort, with the neighbor loops and the wrap of topology `T`.
+    fn after_sort<T: Topology>(&mut self, topology: T, dt: f64) -> Result<(), CudaError> {
+        self.density(topology)?;
+        self.mirrored_walls(topology)?;
         let n = self.bound;
         let d = &self.device;
         let state = ParticleState {
-            neighborhood: self.neighborhood(),
+            neighborhood: self.neighborhood(topology),
             fluid: self.host.fluid,
             id: d.id.view(n),
             velocity: vec3_view(&d.velocity, n),
@@ -335,12 +344,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         self.host.model.accelerations(&mut passes, state);
         passes.result?;
         self.nozzles()?;
-        self.leapfrog(dt)?;
-        self.host.advance_clock(dt, limit);
-        if self.host.steps % self.check_every == 0 {
-            self.read_diagnostics()?;
-        }
-        Ok(())
+        self.leapfrog(topology, dt)
     }
 
     /// Reads the device's diagnostics and particle count; stops an unstable run.
@@ -382,12 +386,12 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         ByValue(self.device.count.view(1))
     }
 
-    fn neighborhood(&self) -> Neighborhood<'static> {
+    fn neighborhood<T: Topology>(&self, topology: T) -> Neighborhood<'static, T> {
         Neighborhood {
             grid: self.host.grid.grid,
             cell_start: self.device.cell_start.view(self.device.cell_start.len()),
             position: vec3_view(&self.device.position, self.bound),
-            topology: Open,
+            topology,
         }
     }
 
@@ -498,24 +502,27 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
     }
 
     /// Lines 5-8: density (pressure is evaluated from it where it is read).
-    fn density(&mut self) -> Result<(), CudaError> {
+    fn density<T: Topology>(&mut self, topology: T) -> Result<(), CudaError> {
         let n = self.bound;
-        let args =
-            DensityArgs { neighborhood: self.neighborhood(), fluid: self.host.fluid, density: self.device.density.view_mut(n) };
+        let args = DensityArgs {
+            neighborhood: self.neighborhood(topology),
+            fluid: self.host.fluid,
+            density: self.device.density.view_mut(n),
+        };
         let count = self.count();
-        // SAFETY: density_<R>(count, args).
-        unsafe { self.gpu.launch(kernel::<R>("density", "", ""), n as u32, &[&count, &ByValue(args)]) }
+        // SAFETY: density_<T>_<R>(count, args).
+        unsafe { self.gpu.launch(kernel::<R>("density", "", T::NAME), n as u32, &[&count, &ByValue(args)]) }
     }
 
     /// Wall particles mirror the fluid, when the scene asks (see `coil_kernels::mirrored_wall`).
-    fn mirrored_walls(&mut self) -> Result<(), CudaError> {
+    fn mirrored_walls<T: Topology>(&mut self, topology: T) -> Result<(), CudaError> {
         let Some(mirror) = &self.device.wall_mirror else {
             return Ok(());
         };
         let n = self.bound;
         let d = &self.device;
         let args = MirroredWallArgs {
-            neighborhood: self.neighborhood(),
+            neighborhood: self.neighborhood(topology),
             fluid: self.host.fluid,
             id: d.id.view(n),
             mirror: vec3_view(mirror, mirror[0].len()),
@@ -523,8 +530,8 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
             density: d.density.view_mut(n),
         };
         let count = self.count();
-        // SAFETY: mirrored_wall_<R>(count, args).
-        unsafe { self.gpu.launch(kernel::<R>("mirrored_wall", "", ""), n as u32, &[&count, &ByValue(args)]) }
+        // SAFETY: mirrored_wall_<T>_<R>(count, args).
+        unsafe { self.gpu.launch(kernel::<R>("mirrored_wall", "", T::NAME), n as u32, &[&count, &ByValue(args)]) }
     }
 
     /// Fluid inside a nozzle's tube moves with the jet (see `coil_kernels::nozzle`).
@@ -548,7 +555,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
     }
 
     /// Lines 17-19: leap-frog.
-    fn leapfrog(&mut self, dt: f64) -> Result<(), CudaError> {
+    fn leapfrog<T: Topology>(&mut self, topology: T, dt: f64) -> Result<(), CudaError> {
         let n = self.bound;
         let d = &self.device;
         let args = LeapfrogArgs {
@@ -560,10 +567,10 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
             position: vec3_view_mut(&d.position, n),
             velocity_half: vec3_view_mut(&d.velocity_half, n),
             velocity: vec3_view_mut(&d.velocity, n),
-            topology: Open,
+            topology,
         };
         let count = self.count();
-        // SAFETY: leapfrog_<R>(count, args).
-        unsafe { self.gpu.launch(kernel::<R>("leapfrog", "", ""), n as u32, &[&count, &ByValue(args)]) }
+        // SAFETY: leapfrog_<T>_<R>(count, args).
+        unsafe { self.gpu.launch(kernel::<R>("leapfrog", "", T::NAME), n as u32, &[&count, &ByValue(args)]) }
     }
 }

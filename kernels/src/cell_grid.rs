@@ -154,35 +154,36 @@ impl<T: Topology> Neighborhood<'_, T> {
         let wrap = Periodic { origin: self.grid.origin, period };
         let h2_f64 = h2.to_f64();
         let dx_cells = self.grid.dims[0];
-        // The x cells c-1..=c+1 as at most two contiguous runs.
-        let mut runs = [(0u32, 0u32); 2];
-        let run_count = if period[0] > 0.0 && c[0] == 0 {
-            runs = [(0, 1), (dx_cells - 1, dx_cells - 1)];
-            2
+        // The x cells c-1..=c+1 as at most two contiguous runs, held in scalars: an array
+        // indexed in the loop would live in the device's local memory.
+        let (first, second) = if period[0] > 0.0 && c[0] == 0 {
+            ((0, 1), Some((dx_cells - 1, dx_cells - 1)))
         } else if period[0] > 0.0 && c[0] == dx_cells - 1 {
-            runs = [(0, 0), (dx_cells - 2, dx_cells - 1)];
-            2
+            ((0, 0), Some((dx_cells - 2, dx_cells - 1)))
         } else {
-            runs[0] = (c[0].saturating_sub(1), if c[0] + 1 < dx_cells { c[0] + 1 } else { c[0] });
-            1
+            ((c[0].saturating_sub(1), if c[0] + 1 < dx_cells { c[0] + 1 } else { c[0] }), None)
+        };
+        let mut run = |(x_lo, x_hi): (u32, u32), y: u32, z: u32| {
+            let start = self.cell_start.at(self.grid.linear_index([x_lo, y, z]) as usize) as usize;
+            let end = self.cell_start.at(self.grid.linear_index([x_hi, y, z]) as usize + 1) as usize;
+            for j in start..end {
+                let dx = minimum_image(xi[0] - self.position.x.at(j), period[0]);
+                let dy = minimum_image(xi[1] - self.position.y.at(j), period[1]);
+                let dz = minimum_image(xi[2] - self.position.z.at(j), period[2]);
+                let r2 = dx * dx + dy * dy + dz * dz;
+                if r2 < h2_f64 {
+                    let r_ij = Vec3::new(R::from_f64(dx), R::from_f64(dy), R::from_f64(dz));
+                    f(j, r_ij, R::from_f64(r2));
+                }
+            }
         };
         for dz in -1..=1 {
             let Some(z) = wrap.neighbor_cell(&self.grid, 2, c[2], dz) else { continue };
             for dy in -1..=1 {
                 let Some(y) = wrap.neighbor_cell(&self.grid, 1, c[1], dy) else { continue };
-                for &(x_lo, x_hi) in &runs[..run_count] {
-                    let start = self.cell_start.at(self.grid.linear_index([x_lo, y, z]) as usize) as usize;
-                    let end = self.cell_start.at(self.grid.linear_index([x_hi, y, z]) as usize + 1) as usize;
-                    for j in start..end {
-                        let dx = minimum_image(xi[0] - self.position.x.at(j), period[0]);
-                        let dy = minimum_image(xi[1] - self.position.y.at(j), period[1]);
-                        let dz = minimum_image(xi[2] - self.position.z.at(j), period[2]);
-                        let r2 = dx * dx + dy * dy + dz * dz;
-                        if r2 < h2_f64 {
-                            let r_ij = Vec3::new(R::from_f64(dx), R::from_f64(dy), R::from_f64(dz));
-                            f(j, r_ij, R::from_f64(r2));
-                        }
-                    }
+                run(first, y, z);
+                if let Some(second) = second {
+                    run(second, y, z);
                 }
             }
         }

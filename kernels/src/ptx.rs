@@ -1,6 +1,6 @@
 //! PTX entry points: one thread per particle (or cell, or scan chunk), each calling the same
 //! function the CPU backend runs. Names carry the precision and, where there is one, the
-//! physics variant, so the host picks the kernel of its run once.
+//! physics variant and topology, so the host picks the kernel of its run once.
 //!
 //! Per-particle kernels read the particle count from device memory (`count`), because the
 //! sort drops particles that left the domain on the device: the host launches enough threads
@@ -16,7 +16,7 @@ use crate::leapfrog::{leapfrog_pass, LeapfrogArgs};
 use crate::mirrored_wall::{mirrored_wall_pass, MirroredWallArgs};
 use crate::nozzle::{nozzle_pass, NozzleArgs};
 use crate::shear_viscosity::{shear_viscosity_pass, ShearViscosityArgs};
-use crate::topology::Open;
+use crate::topology::{Open, Periodic};
 use crate::velocity_gradient::{stress_pass, StressArgs};
 use crate::view::{View, ViewMut};
 use core::arch::nvptx;
@@ -46,69 +46,98 @@ macro_rules! per_index_kernel {
     };
 }
 
+/// A pass's entries for an open and for a periodic domain: `$args<'static, .., T>` run by
+/// `$pass::<.., T>`, the topology last in both.
+macro_rules! per_topology_kernels {
+    ($open:ident, $periodic:ident, $args:ident<$($a:ty),+>, $pass:ident<$($p:ty),+>) => {
+        per_index_kernel!($open, $args<'static, $($a),+, Open>, $pass::<$($p),+, Open>);
+        per_index_kernel!($periodic, $args<'static, $($a),+, Periodic>, $pass::<$($p),+, Periodic>);
+    };
+}
+
 per_index_kernel!(hash, HashArgs<'static>, hash_pass);
-per_index_kernel!(density_f32, DensityArgs<'static, f32>, density_pass::<f32, Open>);
-per_index_kernel!(density_f64, DensityArgs<'static, f64>, density_pass::<f64, Open>);
-per_index_kernel!(mirrored_wall_f32, MirroredWallArgs<'static, f32>, mirrored_wall_pass::<f32, Open>);
-per_index_kernel!(mirrored_wall_f64, MirroredWallArgs<'static, f64>, mirrored_wall_pass::<f64, Open>);
-per_index_kernel!(stress_newtonian_f32, StressArgs<'static, f32, Newtonian<f32>>, stress_pass::<f32, Newtonian<f32>, Open>);
-per_index_kernel!(stress_newtonian_f64, StressArgs<'static, f64, Newtonian<f64>>, stress_pass::<f64, Newtonian<f64>, Open>);
-per_index_kernel!(stress_cross_f32, StressArgs<'static, f32, Cross<f32>>, stress_pass::<f32, Cross<f32>, Open>);
-per_index_kernel!(stress_cross_f64, StressArgs<'static, f64, Cross<f64>>, stress_pass::<f64, Cross<f64>, Open>);
-per_index_kernel!(
+per_topology_kernels!(density_f32, density_periodic_f32, DensityArgs<f32>, density_pass<f32>);
+per_topology_kernels!(density_f64, density_periodic_f64, DensityArgs<f64>, density_pass<f64>);
+per_topology_kernels!(mirrored_wall_f32, mirrored_wall_periodic_f32, MirroredWallArgs<f32>, mirrored_wall_pass<f32>);
+per_topology_kernels!(mirrored_wall_f64, mirrored_wall_periodic_f64, MirroredWallArgs<f64>, mirrored_wall_pass<f64>);
+per_topology_kernels!(
+    stress_newtonian_f32,
+    stress_newtonian_periodic_f32,
+    StressArgs<f32, Newtonian<f32>>,
+    stress_pass<f32, Newtonian<f32>>
+);
+per_topology_kernels!(
+    stress_newtonian_f64,
+    stress_newtonian_periodic_f64,
+    StressArgs<f64, Newtonian<f64>>,
+    stress_pass<f64, Newtonian<f64>>
+);
+per_topology_kernels!(stress_cross_f32, stress_cross_periodic_f32, StressArgs<f32, Cross<f32>>, stress_pass<f32, Cross<f32>>);
+per_topology_kernels!(stress_cross_f64, stress_cross_periodic_f64, StressArgs<f64, Cross<f64>>, stress_pass<f64, Cross<f64>>);
+per_topology_kernels!(
     acceleration_stress_f32,
-    AccelerationArgs<'static, f32, StressDivergence<'static, f32>>,
-    acceleration_pass::<f32, StressDivergence<'static, f32>, Open>
+    acceleration_stress_periodic_f32,
+    AccelerationArgs<f32, StressDivergence<'static, f32>>,
+    acceleration_pass<f32, StressDivergence<'static, f32>>
 );
-per_index_kernel!(
+per_topology_kernels!(
     acceleration_stress_f64,
-    AccelerationArgs<'static, f64, StressDivergence<'static, f64>>,
-    acceleration_pass::<f64, StressDivergence<'static, f64>, Open>
+    acceleration_stress_periodic_f64,
+    AccelerationArgs<f64, StressDivergence<'static, f64>>,
+    acceleration_pass<f64, StressDivergence<'static, f64>>
 );
-per_index_kernel!(
+per_topology_kernels!(
     acceleration_laplacian_f32,
-    AccelerationArgs<'static, f32, VelocityLaplacian<'static, f32>>,
-    acceleration_pass::<f32, VelocityLaplacian<'static, f32>, Open>
+    acceleration_laplacian_periodic_f32,
+    AccelerationArgs<f32, VelocityLaplacian<'static, f32>>,
+    acceleration_pass<f32, VelocityLaplacian<'static, f32>>
 );
-per_index_kernel!(
+per_topology_kernels!(
     acceleration_laplacian_f64,
-    AccelerationArgs<'static, f64, VelocityLaplacian<'static, f64>>,
-    acceleration_pass::<f64, VelocityLaplacian<'static, f64>, Open>
+    acceleration_laplacian_periodic_f64,
+    AccelerationArgs<f64, VelocityLaplacian<'static, f64>>,
+    acceleration_pass<f64, VelocityLaplacian<'static, f64>>
 );
-per_index_kernel!(
+per_topology_kernels!(
     shear_viscosity_cross_f32,
-    ShearViscosityArgs<'static, f32, Cross<f32>>,
-    shear_viscosity_pass::<f32, Cross<f32>, Open>
+    shear_viscosity_cross_periodic_f32,
+    ShearViscosityArgs<f32, Cross<f32>>,
+    shear_viscosity_pass<f32, Cross<f32>>
 );
-per_index_kernel!(
+per_topology_kernels!(
     shear_viscosity_cross_f64,
-    ShearViscosityArgs<'static, f64, Cross<f64>>,
-    shear_viscosity_pass::<f64, Cross<f64>, Open>
+    shear_viscosity_cross_periodic_f64,
+    ShearViscosityArgs<f64, Cross<f64>>,
+    shear_viscosity_pass<f64, Cross<f64>>
 );
-per_index_kernel!(
+per_topology_kernels!(
     acceleration_morris_f32,
-    AccelerationArgs<'static, f32, MorrisViscosity<'static, f32, Newtonian<f32>>>,
-    acceleration_pass::<f32, MorrisViscosity<'static, f32, Newtonian<f32>>, Open>
+    acceleration_morris_periodic_f32,
+    AccelerationArgs<f32, MorrisViscosity<'static, f32, Newtonian<f32>>>,
+    acceleration_pass<f32, MorrisViscosity<'static, f32, Newtonian<f32>>>
 );
-per_index_kernel!(
+per_topology_kernels!(
     acceleration_morris_f64,
-    AccelerationArgs<'static, f64, MorrisViscosity<'static, f64, Newtonian<f64>>>,
-    acceleration_pass::<f64, MorrisViscosity<'static, f64, Newtonian<f64>>, Open>
+    acceleration_morris_periodic_f64,
+    AccelerationArgs<f64, MorrisViscosity<'static, f64, Newtonian<f64>>>,
+    acceleration_pass<f64, MorrisViscosity<'static, f64, Newtonian<f64>>>
 );
-per_index_kernel!(
+per_topology_kernels!(
     acceleration_morris_shear_f32,
-    AccelerationArgs<'static, f32, MorrisViscosity<'static, f32, View<'static, f32>>>,
-    acceleration_pass::<f32, MorrisViscosity<'static, f32, View<'static, f32>>, Open>
+    acceleration_morris_shear_periodic_f32,
+    AccelerationArgs<f32, MorrisViscosity<'static, f32, View<'static, f32>>>,
+    acceleration_pass<f32, MorrisViscosity<'static, f32, View<'static, f32>>>
 );
-per_index_kernel!(
+per_topology_kernels!(
     acceleration_morris_shear_f64,
-    AccelerationArgs<'static, f64, MorrisViscosity<'static, f64, View<'static, f64>>>,
-    acceleration_pass::<f64, MorrisViscosity<'static, f64, View<'static, f64>>, Open>
+    acceleration_morris_shear_periodic_f64,
+    AccelerationArgs<f64, MorrisViscosity<'static, f64, View<'static, f64>>>,
+    acceleration_pass<f64, MorrisViscosity<'static, f64, View<'static, f64>>>
 );
 per_index_kernel!(nozzle_f32, NozzleArgs<'static, f32>, nozzle_pass::<f32>);
 per_index_kernel!(nozzle_f64, NozzleArgs<'static, f64>, nozzle_pass::<f64>);
-per_index_kernel!(leapfrog_f32, LeapfrogArgs<'static, f32>, leapfrog_pass::<f32, Open>);
-per_index_kernel!(leapfrog_f64, LeapfrogArgs<'static, f64>, leapfrog_pass::<f64, Open>);
+per_topology_kernels!(leapfrog_f32, leapfrog_periodic_f32, LeapfrogArgs<f32>, leapfrog_pass<f32>);
+per_topology_kernels!(leapfrog_f64, leapfrog_periodic_f64, LeapfrogArgs<f64>, leapfrog_pass<f64>);
 
 #[no_mangle]
 pub unsafe extern "ptx-kernel" fn count_particles(

@@ -77,14 +77,21 @@ impl Topology for Periodic {
 }
 
 impl Periodic {
-    /// The grid's cell coordinate `c + offset` along axis `a`, wrapped when the axis wraps;
-    /// `None` where an open axis ends.
+    /// The grid's cell coordinate `c + offset` along axis `a`, `offset` within one period,
+    /// wrapped when the axis wraps; `None` where an open axis ends.
     #[inline(always)]
     pub fn neighbor_cell(&self, grid: &CellGrid, a: usize, c: u32, offset: i32) -> Option<u32> {
         let d = grid.dims[a] as i32;
         let k = c as i32 + offset;
         if self.period[a] > 0.0 {
-            Some(((k + d) % d) as u32)
+            // A remainder would leave a division-by-zero trap in the device code.
+            Some(if k < 0 {
+                k + d
+            } else if k >= d {
+                k - d
+            } else {
+                k
+            } as u32)
         } else if k < 0 || k >= d {
             None
         } else {
