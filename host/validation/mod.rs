@@ -307,10 +307,10 @@ pub fn taylor_green(across: usize, op: ViscosityOperator, out: Option<&Path>) ->
 /// the samples past 1.5 R0.
 pub fn huppert_spreading(across: usize, op: ViscosityOperator, out: Option<&Path>) -> Result<Vec<CaseResult>, String> {
     let release = huppert::Release::new(across, op);
-    let started = Instant::now();
-    let r = huppert::simulate(&release)?;
-    let wall_s = started.elapsed().as_secs_f64();
     let case = format!("Huppert spreading, {}, {across} across R0", operator_name(op));
+    let started = Instant::now();
+    let r = huppert::simulate(&release).map_err(|e| format!("{case}: {e}"))?;
+    let wall_s = started.elapsed().as_secs_f64();
     let plot = out
         .map(|dir| {
             let reference = r.radii.iter().map(|p| [p[0], release.huppert_radius(r.volume_m3, p[0]) / release.radius_m]).collect();
@@ -335,13 +335,14 @@ pub fn huppert_spreading(across: usize, op: ViscosityOperator, out: Option<&Path
         .transpose()?;
     let onset = 1.5 * release.radius_m;
     let conditions = format!(
-        "{} samples from r = 1.5 R0 to {} R0 (R0 = H0 = {} m, nu = {} m^2/s, Re = {:.3} at 1.5 R0); c = {} m/s",
+        "{} samples from r = 1.5 R0 to {} R0 (R0 = H0 = {} m, nu = {} m^2/s, Re = {:.3} at 1.5 R0); c = {} m/s; dt {} x the Eq. (10) bound",
         r.fitted,
         release.final_spread,
         release.radius_m,
         release.nu_m2_s,
         release.reynolds_at(r.volume_m3, onset),
-        release.sound_speed_m_s
+        release.sound_speed_m_s,
+        release.safety_factor
     );
     Ok(vec![
         CaseResult {
@@ -412,12 +413,12 @@ pub fn jet_buckling(
     end_time_s: f64,
     out: Option<&Path>,
 ) -> Result<CaseResult, String> {
-    let started = Instant::now();
-    let offsets = jet::axis_offsets(height_over_d, op, end_time_s)?;
-    let offset = offsets.iter().map(|p| p[1]).fold(0.0, f64::max);
     let expect = if buckles { "buckles" } else { "stays straight" };
     let tolerance = if buckles { 0.5 } else { 0.1 };
     let case = format!("jet, H/D = {height_over_d}, Re = 0.2, {}: {expect}", operator_name(op));
+    let started = Instant::now();
+    let offsets = jet::axis_offsets(height_over_d, op, end_time_s).map_err(|e| format!("{case}: {e}"))?;
+    let offset = offsets.iter().map(|p| p[1]).fold(0.0, f64::max);
     let plot = out
         .map(|dir| {
             let chart = Chart {
