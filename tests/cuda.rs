@@ -310,7 +310,7 @@ fn periodic_channels_on_the_gpu_agree_with_the_cpu() {
     let Some((paper, wrapped)) = worst(&scene, &start, cross::<f64>(&scene)) else { return };
     let morris = ShearThinningMorrisModel(cross_law::<f64>(&scene.material.viscosity));
     let Some((thinning, _)) = worst(&scene, &start, morris) else { return };
-    println!("periodic channel, f64: largest difference after 50 steps {paper:.3e} m (paper's operator), {thinning:.3e} m (Morris, Cross); {wrapped} particles wrapped");
+    println!("periodic channel, f64: largest position difference after 50 steps {paper:.3e} m (paper's operator), {thinning:.3e} m (Morris, Cross); {wrapped} particles wrapped");
     assert!(wrapped > 0, "no particle crossed a periodic face: the test would not see the wrap");
     assert!(paper <= 1e-10 && thinning <= 1e-10, "positions differ by {paper:.3e} / {thinning:.3e} m");
 }
