@@ -438,7 +438,8 @@ enum ValidationGroup {
 fn validate_command(quick: bool, only: &[ValidationGroup], out: &Path) -> Result<bool, String> {
     use coil::scene::ViscosityOperator;
     use coil::validation::{
-        cross_poiseuille, huppert_spreading, hydrostatic_tank, jet_buckling, startup_poiseuille, taylor_green, torus_ordering, CaseResult,
+        cross_poiseuille, huppert_spreading, hydrostatic_tank, jet_buckling, startup_poiseuille, taylor_green, torus_ordering,
+        CaseResult,
     };
     std::fs::create_dir_all(out).map_err(|e| format!("--out: {} cannot be created: {e}", out.display()))?;
     let resolutions: &[usize] = if quick { &[10, 20] } else { &[10, 20, 30] };

@@ -152,14 +152,7 @@ pub fn initial_particles(scene: &Scene, file: &str) -> Result<InitialParticles, 
         let (b, r) = (c.base_centre_m, c.radius_m);
         let min = [b[0] - r, b[1], b[2] - r];
         let n = [cells(2.0 * r, s), cells(c.height_m, s), cells(2.0 * r, s)];
-        lattice(
-            min,
-            s,
-            [0; 3],
-            n,
-            |_, x| (x[0] - b[0]).powi(2) + (x[2] - b[2]).powi(2) <= r * r,
-            &mut p.fluid,
-        );
+        lattice(min, s, [0; 3], n, |_, x| (x[0] - b[0]).powi(2) + (x[2] - b[2]).powi(2) <= r * r, &mut p.fluid);
         settle(&mut p, before, c.velocity_m_s, s, format!("fluid_cylinder[{k}]"), file)?;
     }
     if let Some(budget) = scene.simulation.max_fluid_particles {

@@ -281,9 +281,9 @@ fn an_unstable_gpu_run_is_stopped_by_the_guard() {
 /// for f64, orders above the fused multiply-adds' rounding.
 #[test]
 fn periodic_channels_on_the_gpu_agree_with_the_cpu() {
-    use coil::validation::poiseuille::{Channel, CrossLaw};
     use coil::model::ShearThinningMorrisModel;
     use coil::scene::ViscosityOperator;
+    use coil::validation::poiseuille::{Channel, CrossLaw};
     let mut channel = Channel::morris(10, ViscosityOperator::Stress);
     channel.cross = Some(CrossLaw { nu_inf_m2_s: 2.5e-7, k_s: 10.0, n: 0.5 });
     let mut scene = channel.scene(1.0);
@@ -296,11 +296,8 @@ fn periodic_channels_on_the_gpu_agree_with_the_cpu() {
         assert_eq!(c.len(), g.len());
         // Particles that crossed the face at x = L came back in at x = 0.
         let wrapped = c.iter().zip(initial).filter(|(now, start)| now.0 == start.0 && now.1[0] < start.1[0]).count();
-        let difference = c
-            .iter()
-            .zip(&g)
-            .map(|(a, b)| (0..3).map(|k| (a.1[k] - b.1[k]).abs()).fold(0.0, f64::max))
-            .fold(0.0, f64::max);
+        let difference =
+            c.iter().zip(&g).map(|(a, b)| (0..3).map(|k| (a.1[k] - b.1[k]).abs()).fold(0.0, f64::max)).fold(0.0, f64::max);
         Some((difference, wrapped))
     }
     let start = {

@@ -171,10 +171,9 @@ pub fn simulate(release: &Release) -> Result<Spreading, String> {
     let logs: Vec<[f64; 2]> = late.iter().map(|p| [p[0].ln(), p[1].ln()]).collect();
     let mean = |k: usize| logs.iter().map(|p| p[k]).sum::<f64>() / logs.len() as f64;
     let (mx, my) = (mean(0), mean(1));
-    let exponent = logs.iter().map(|p| (p[0] - mx) * (p[1] - my)).sum::<f64>()
-        / logs.iter().map(|p| (p[0] - mx).powi(2)).sum::<f64>();
-    let mut ratios: Vec<f64> =
-        late.iter().map(|p| HUPPERT_PREFACTOR * p[1] / release.huppert_radius(volume_m3, p[0])).collect();
+    let exponent =
+        logs.iter().map(|p| (p[0] - mx) * (p[1] - my)).sum::<f64>() / logs.iter().map(|p| (p[0] - mx).powi(2)).sum::<f64>();
+    let mut ratios: Vec<f64> = late.iter().map(|p| HUPPERT_PREFACTOR * p[1] / release.huppert_radius(volume_m3, p[0])).collect();
     ratios.sort_by(f64::total_cmp);
     let prefactor = ratios[ratios.len() / 2];
     Ok(Spreading { radii, volume_m3, exponent, prefactor, fitted: late.len() })

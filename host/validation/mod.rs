@@ -313,7 +313,8 @@ pub fn huppert_spreading(across: usize, op: ViscosityOperator, out: Option<&Path
     let wall_s = started.elapsed().as_secs_f64();
     let plot = out
         .map(|dir| {
-            let reference = r.radii.iter().map(|p| [p[0], release.huppert_radius(r.volume_m3, p[0]) / release.radius_m]).collect();
+            let reference =
+                r.radii.iter().map(|p| [p[0], release.huppert_radius(r.volume_m3, p[0]) / release.radius_m]).collect();
             let simulated = r.radii.iter().map(|p| [p[0], p[1] / release.radius_m]).collect();
             let chart = Chart {
                 title: case.clone(),
@@ -359,10 +360,7 @@ pub fn huppert_spreading(across: usize, op: ViscosityOperator, out: Option<&Path
         },
         CaseResult {
             case: format!("{case}: prefactor"),
-            measure: format!(
-                "|median r / (g V^3 t / 3 nu)^(1/8) / 0.894 - 1| (measured {:.4}); {conditions}",
-                r.prefactor
-            ),
+            measure: format!("|median r / (g V^3 t / 3 nu)^(1/8) / 0.894 - 1| (measured {:.4}); {conditions}", r.prefactor),
             error: (r.prefactor / huppert::HUPPERT_PREFACTOR - 1.0).abs(),
             tolerance: 0.1,
             at_least: false,
