@@ -28,8 +28,6 @@ pub struct Release {
     pub sound_speed_m_s: f64,
     /// The current is followed until Huppert's radius reaches this many R0.
     pub final_spread: f64,
-    /// Multiplies the automatic dt.
-    pub safety_factor: f64,
 }
 
 impl Release {
@@ -44,10 +42,6 @@ impl Release {
             // g H0 / c^2 = 1 %, and the flow stays below Mach 0.05.
             sound_speed_m_s: 10.0,
             final_spread: 2.0,
-            // At the Eq. (10) bound the paper's operator lets one particle of the thinning
-            // current on the no-slip plate run away (t = 2.49 s at 8 across, 2.16 s at 10, of
-            // 3.1 s); at half the bound it runs through. The Laplacians run at the bound.
-            safety_factor: if operator == ViscosityOperator::Stress { 0.5 } else { 1.0 },
         }
     }
 
@@ -101,7 +95,6 @@ max_m = [{reach:e}, {top:e}, {reach:e}]
 end_time_s = {end_time_s:e}
 precision = "f64"
 walls = "mirrored"
-time_step = {{ safety_factor = {sf:e} }}
 [[boundary]]
 shape = "plate"
 height_m = 0.0
@@ -117,7 +110,6 @@ height_m = {h:e}
             lo = -reach,
             floor = -4.0 * s,
             top = 2.0 * h,
-            sf = self.safety_factor,
         );
         Scene::parse(&text, "huppert (generated)").expect("the generated release is a valid scene")
     }

@@ -336,14 +336,13 @@ pub fn huppert_spreading(across: usize, op: ViscosityOperator, out: Option<&Path
         .transpose()?;
     let onset = 1.5 * release.radius_m;
     let conditions = format!(
-        "{} samples from r = 1.5 R0 to {} R0 (R0 = H0 = {} m, nu = {} m^2/s, Re = {:.3} at 1.5 R0); c = {} m/s; dt {} x the Eq. (10) bound",
+        "{} samples from r = 1.5 R0 to {} R0 (R0 = H0 = {} m, nu = {} m^2/s, Re = {:.3} at 1.5 R0); c = {} m/s",
         r.fitted,
         release.final_spread,
         release.radius_m,
         release.nu_m2_s,
         release.reynolds_at(r.volume_m3, onset),
-        release.sound_speed_m_s,
-        release.safety_factor
+        release.sound_speed_m_s
     );
     Ok(vec![
         CaseResult {
