@@ -147,6 +147,19 @@ fn state_by_id<R: Real, M: Model<R>>(sim: &Simulation<R, M>) -> Vec<(u32, [f64; 
     out
 }
 
+/// The largest difference of any coordinate (m) between two `state_by_id`s of the same
+/// particles.
+fn largest_position_difference(c: &[(u32, [f64; 3], [f64; 3])], g: &[(u32, [f64; 3], [f64; 3])]) -> f64 {
+    assert_eq!(c.len(), g.len(), "particle counts");
+    c.iter()
+        .zip(g)
+        .map(|(a, b)| {
+            assert_eq!(a.0, b.0, "particle ids");
+            (0..3).map(|k| (a.1[k] - b.1[k]).abs()).fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max)
+}
+
 /// `steps` fixed steps on the CPU and on the GPU from the same start.
 fn both<R: Real, M: Model<R>>(gpu: Gpu, scene: &Scene, model: M, steps: usize) -> (Simulation<R, M>, GpuSimulation<R, M>) {
     let initial = initial_particles(scene, "dam_break.toml").expect("valid");
@@ -186,16 +199,7 @@ fn a_scene_on_the_gpu_agrees_with_the_cpu() {
     fn compare<R: Real>(gpu: Gpu, position_tolerance_m: f64) {
         let scene = dam_break();
         let (cpu, on_gpu) = both::<R, _>(gpu, &scene, cross::<R>(&scene), 50);
-        let (c, g) = (state_by_id(&cpu), state_by_id(&on_gpu.host));
-        assert_eq!(c.len(), g.len(), "{}: particle counts", R::NAME);
-        let worst = c
-            .iter()
-            .zip(&g)
-            .map(|(a, b)| {
-                assert_eq!(a.0, b.0);
-                (0..3).map(|k| (a.1[k] - b.1[k]).abs()).fold(0.0, f64::max)
-            })
-            .fold(0.0, f64::max);
+        let worst = largest_position_difference(&state_by_id(&cpu), &state_by_id(&on_gpu.host));
         println!("{}: largest position difference after 50 steps {worst:.3e} m", R::NAME);
         assert!(worst <= position_tolerance_m, "{}: positions differ by {worst:.3e} m", R::NAME);
     }
@@ -213,9 +217,7 @@ fn mirrored_walls_on_the_gpu_agree_with_the_cpu() {
     let mut scene = dam_break();
     scene.simulation.walls = coil::scene::Walls::Mirrored;
     let (cpu, on_gpu) = both::<f64, _>(gpu, &scene, cross::<f64>(&scene), 50);
-    let (c, g) = (state_by_id(&cpu), state_by_id(&on_gpu.host));
-    assert_eq!(c.len(), g.len());
-    let worst = c.iter().zip(&g).map(|(a, b)| (0..3).map(|k| (a.1[k] - b.1[k]).abs()).fold(0.0, f64::max)).fold(0.0, f64::max);
+    let worst = largest_position_difference(&state_by_id(&cpu), &state_by_id(&on_gpu.host));
     println!("mirrored walls, f64: largest position difference after 50 steps {worst:.3e} m");
     assert!(worst <= 1e-10, "positions differ by {worst:.3e} m");
 }
@@ -226,9 +228,7 @@ fn mirrored_walls_on_the_gpu_agree_with_the_cpu() {
 fn morris_operators_on_the_gpu_agree_with_the_cpu() {
     fn worst<M: Model<f64>>(scene: &Scene, model: M) -> Option<f64> {
         let (cpu, on_gpu) = both::<f64, _>(device()?, scene, model, 50);
-        let (c, g) = (state_by_id(&cpu), state_by_id(&on_gpu.host));
-        assert_eq!(c.len(), g.len());
-        Some(c.iter().zip(&g).map(|(a, b)| (0..3).map(|k| (a.1[k] - b.1[k]).abs()).fold(0.0, f64::max)).fold(0.0, f64::max))
+        Some(largest_position_difference(&state_by_id(&cpu), &state_by_id(&on_gpu.host)))
     }
     let scene = dam_break();
     let newtonian = MorrisModel(Newtonian { nu0: scene.material.viscosity.nu0_m2_s });
@@ -292,13 +292,10 @@ fn periodic_channels_on_the_gpu_agree_with_the_cpu() {
     let initial = initial_particles(&scene, "channel").expect("valid");
     fn worst<M: Model<f64>>(scene: &Scene, initial: &[(u32, [f64; 3], [f64; 3])], model: M) -> Option<(f64, usize)> {
         let (cpu, on_gpu) = both::<f64, _>(device()?, scene, model, 50);
-        let (c, g) = (state_by_id(&cpu), state_by_id(&on_gpu.host));
-        assert_eq!(c.len(), g.len());
+        let c = state_by_id(&cpu);
         // Particles that crossed the face at x = L came back in at x = 0.
         let wrapped = c.iter().zip(initial).filter(|(now, start)| now.0 == start.0 && now.1[0] < start.1[0]).count();
-        let difference =
-            c.iter().zip(&g).map(|(a, b)| (0..3).map(|k| (a.1[k] - b.1[k]).abs()).fold(0.0, f64::max)).fold(0.0, f64::max);
-        Some((difference, wrapped))
+        Some((largest_position_difference(&c, &state_by_id(&on_gpu.host)), wrapped))
     }
     let start = {
         let cpu = Simulation::<f64, _>::new(&scene, &initial, cross::<f64>(&scene));
