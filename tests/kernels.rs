@@ -398,6 +398,56 @@ fn the_mirrored_wall_fit_falls_back_to_the_mean_of_a_single_neighbor_or_a_line()
     }
 }
 
+/// A thinning current on a plate is one layer of fluid: the wall particles a spacing down mirror
+/// it a spacing above itself, where a linear fit across the layer would turn the velocity
+/// differences within it (and the layer's roughness) into a wall-normal slope and extrapolate
+/// it. Whatever the layer, the sample there must stay within its velocities, as their weighted
+/// mean does. The fit without [`MAX_LEVERAGE`] left them by 15 times their range here.
+#[test]
+fn the_mirrored_wall_fit_does_not_extrapolate_across_a_single_layer() {
+    use coil::neighbor_grid::NeighborGrid;
+    use coil::particles::{ModelFields, Particles};
+    use coil_kernels::mirrored_wall::fluid_at;
+    use coil_kernels::view::ViewMut;
+    let (s, h) = (0.01, 0.02);
+    let fluid = Fluid { boundary_count: 0, kernels: SmoothingKernels::new(h), ..fluid::<f64>() };
+    let mut state = 5u64;
+    let mut worst: f64 = 0.0;
+    for _layer in 0..50 {
+        let roughness = s * (0.02 + 0.13 * uniform(&mut state));
+        let mut p = Particles::<f64>::with_capacity(100, ModelFields::default());
+        for k in 0..9 {
+            for i in 0..9 {
+                let x = [0, 1, 2].map(|a| {
+                    let lattice = [i as f64 * s, 0.5 * s, k as f64 * s][a];
+                    lattice + roughness * (2.0 * uniform(&mut state) - 1.0)
+                });
+                // A spreading current: radial speed growing outwards, and noise.
+                let v = [0.1 * x[0] / s, 0.0, 0.1 * x[2] / s].map(|c| c + 0.02 * (2.0 * uniform(&mut state) - 1.0));
+                p.push(p.len() as u32, x, v);
+            }
+        }
+        let (lowest, highest) = (0..p.len()).fold(([f64::MAX; 3], [f64::MIN; 3]), |(lo, hi), i| {
+            ([0, 1, 2].map(|a| lo[a].min(p.velocity[a][i])), [0, 1, 2].map(|a| hi[a].max(p.velocity[a][i])))
+        });
+        let mut grid = NeighborGrid::new([-0.05; 3], [0.15; 3], h, [false; 3], p.capacity());
+        grid.sort(&mut p);
+        let n = p.len();
+        let (id, nb) = (p.id.clone(), grid.neighborhood(coil::particles::vec3_view(&p.position, n), Open));
+        let velocity = coil::particles::vec3_view_mut(&mut p.velocity, n);
+        let density = ViewMut::new(&mut p.density);
+        for _mirror in 0..20 {
+            let x = [s * (2.0 + 4.0 * uniform(&mut state)), 1.5 * s, s * (2.0 + 4.0 * uniform(&mut state))];
+            let v = fluid_at(x, &nb, &View::new(&id), &velocity, &density, &fluid).velocity;
+            for (a, c) in [v.x, v.y, v.z].into_iter().enumerate() {
+                let range = highest[a] - lowest[a];
+                worst = worst.max((lowest[a] - c).max(c - highest[a]) / range);
+            }
+        }
+    }
+    assert!(worst <= 1e-12, "a sample left the layer's velocities by {worst:.3} times their range");
+}
+
 #[test]
 fn a_symmetric_solve_inverts_and_refuses_a_flat_tensor() {
     use coil_kernels::vec3::SymTensor;

@@ -28,13 +28,25 @@ pub struct FluidSample<R> {
     pub pressure: R,
 }
 
+/// The largest leverage w0 m^T C^-1 m of the sample point for which the velocity fit is used:
+/// m is the mean offset of the neighbors from the point and C their weighted covariance, so
+/// this is the squared distance of the extrapolation in units of the neighbors' spread, and
+/// the fit's noise there grows as its square root. Mirror images inside the fluid, and the
+/// fluid next to a wall, have at most 4 (one-sided to the wall surface itself, up to 22); a
+/// single layer of fluid on a plate, rough by 0.1 spacing or less, has 46 and more at the
+/// mirror image a spacing above it. There a fit turns the velocity differences within the
+/// layer into a wall-normal slope and extrapolates it, up to 50 times the velocity noise of
+/// the layer; Eq. (8) then (9) reach those wall particles, two layers down, and the wall's
+/// velocities threw particles of Huppert's thinning current through the plate.
+pub const MAX_LEVERAGE: f64 = 25.0;
+
 /// The fluid at a point `x` (m) from the fluid particles within h of it. Velocity: a linear fit
 /// weighted by poly6 (moving least squares), exact for linear fields, so one-sided neighbors
 /// next to a wall do not bias it; the kernel-weighted mean (Shepard) where the neighbors are
-/// too flat for a fit. Pressure: the kernel-weighted mean, which stays within the fluid's
-/// values where a fit could overshoot them, so a wall never answers a pressure wave with more
-/// than it brought (the tank measured the same with either). Rest at zero pressure where there
-/// is no fluid.
+/// too flat, or the point too far from them, for a fit ([`MAX_LEVERAGE`]). Pressure: the
+/// kernel-weighted mean, which stays within the fluid's values where a fit could overshoot
+/// them, so a wall never answers a pressure wave with more than it brought (the tank measured
+/// the same with either). Rest at zero pressure where there is no fluid.
 #[inline(always)]
 pub fn fluid_at<R: Real, T: Topology>(
     x: [f64; 3],
@@ -81,7 +93,8 @@ pub fn fluid_at<R: Real, T: Topology>(
     // leave a covariance of rounding noise, whose inverse is arbitrary; the mean is all they
     // determine.
     let spread = covariance.trace() > R::from_f64(1e-3) * w0;
-    let velocity = match covariance.solve(mean_q).filter(|_| spread) {
+    let fit = covariance.solve(mean_q).filter(|u| spread && w0 * mean_q.dot(*u) <= R::from_f64(MAX_LEVERAGE));
+    let velocity = match fit {
         Some(u) => {
             let mut centred = v1;
             centred.add_outer(mean_q, -v0);
