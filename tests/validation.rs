@@ -113,28 +113,39 @@ fn the_taylor_green_vortex_decays_at_the_exact_rate() {
     assert!(fine.passed() && fine.error < 0.5 * coarse.error, "{} then {}", coarse.error, fine.error);
 }
 
-/// The jet's axis offset reads the centroid of the slab D/2 to 3D/2 above the plate only: a
-/// rope displaced by 0.6 D there reads 0.6 D whatever lies above or below, a symmetric pile
-/// reads 0, and an empty slab reads nothing.
+/// The jet's axis offset reads where the fluid falls through the slab D/2 to 3D/2 above the
+/// plate: a rope displaced by 0.6 D there reads 0.6 D whatever lies above or below it and
+/// whatever pile at rest or rising fluid surrounds it (the fluid's centroid would read 0.3 D),
+/// a pile alone reads nothing, and so does an empty slab.
 #[test]
-fn the_jet_axis_offset_reads_the_slab_just_above_the_plate() {
+fn the_jet_axis_offset_reads_where_the_fluid_falls_just_above_the_plate() {
     use coil::validation::jet::axis_offset;
     use coil::validation::snapshot::Snapshot;
     let d = 0.02;
-    let mut rope = Snapshot::default();
+    let mut jet = Snapshot::default();
     for k in 0..20 {
         let y = 0.005 * k as f64;
         // Displaced by 0.6 D along x inside the slab and by 3 D elsewhere.
         let x = if (0.5 * d..1.5 * d).contains(&y) { 0.6 * d } else { 3.0 * d };
-        rope.position.extend([[x - 0.001, y, 0.0], [x + 0.001, y, 0.0]]);
+        jet.position.extend([[x - 0.001, y, 0.0], [x + 0.001, y, 0.0]]);
+        jet.velocity.extend([[0.0, -0.6, 0.0], [0.1, -0.6, 0.05]]);
     }
-    let offset = axis_offset(&rope, 0.0, d).expect("fluid in the slab");
-    assert!((offset - 0.6 * d).abs() < 1e-12, "{offset}");
-    let pile = Snapshot {
-        position: vec![[0.03, 0.015, 0.0], [-0.03, 0.015, 0.0], [0.0, 0.015, 0.03], [0.0, 0.015, -0.03]],
-        ..Default::default()
-    };
-    assert!(axis_offset(&pile, 0.0, d).expect("fluid in the slab") < 1e-15);
+    let mut pile = Snapshot::default();
+    for (x, z) in [(0.03, 0.0), (-0.03, 0.0), (0.0, 0.03), (0.0, -0.03), (0.0, 0.0)] {
+        pile.position.push([x, 0.015, z]);
+        pile.velocity.push([0.02, 0.0, -0.01]);
+    }
+    // Fluid welling up beside the rope.
+    pile.position.push([-0.5 * d, 0.02, 0.0]);
+    pile.velocity.push([0.0, 0.3, 0.0]);
+    assert_eq!(axis_offset(&pile, 0.0, d), None);
+    let mut both = jet.clone();
+    both.position.extend(&pile.position);
+    both.velocity.extend(&pile.velocity);
+    for snapshot in [&jet, &both] {
+        let offset = axis_offset(snapshot, 0.0, d).expect("fluid falls through the slab");
+        assert!((offset - 0.6 * d).abs() < 1e-12, "{offset}");
+    }
     assert_eq!(axis_offset(&Snapshot::default(), 0.0, d), None);
 }
 

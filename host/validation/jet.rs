@@ -13,17 +13,21 @@ const NEWTONIAN_JET: &str = include_str!("../../scenes/newtonian_jet.toml");
 const SAMPLE_EVERY_S: f64 = 0.02;
 
 /// Sideways offset of the jet's axis just above the plate (m): the horizontal distance from the
-/// nozzle axis (x = z = 0) of the centroid of the fluid between D/2 and 3D/2 above the plate top
-/// `plate_y` (m). None while no fluid is there.
+/// nozzle axis (x = z = 0) of the centroid of the downward mass flux through the slab between
+/// D/2 and 3D/2 above the plate top `plate_y` (m), each particle there weighted by its
+/// downward speed. The rope is where the fluid falls: a coiling rope lays its fluid all around
+/// the axis, so the centroid of all the fluid in the slab stays near the axis however far the
+/// rope swings, and the pile it builds there barely moves. None while nothing falls there.
 pub fn axis_offset(snapshot: &Snapshot, plate_y: f64, diameter: f64) -> Option<f64> {
     let slab = (plate_y + 0.5 * diameter)..(plate_y + 1.5 * diameter);
-    let (mut n, mut x, mut z) = (0usize, 0.0, 0.0);
-    for p in snapshot.position.iter().filter(|p| slab.contains(&p[1])) {
-        n += 1;
-        x += p[0];
-        z += p[2];
+    let (mut flux, mut x, mut z) = (0.0, 0.0, 0.0);
+    for (p, v) in snapshot.position.iter().zip(&snapshot.velocity).filter(|(p, _)| slab.contains(&p[1])) {
+        let falling = (-v[1]).max(0.0);
+        flux += falling;
+        x += falling * p[0];
+        z += falling * p[2];
     }
-    (n > 0).then(|| (x * x + z * z).sqrt() / n as f64)
+    (flux > 0.0).then(|| (x * x + z * z).sqrt() / flux)
 }
 
 /// The jet's diameter D (m) and its scene with the nozzle `height_over_d` diameters above the
@@ -45,7 +49,7 @@ pub fn jet_scene(height_over_d: f64, op: ViscosityOperator, end_time_s: f64) -> 
 }
 
 /// The sideways offset of the axis over `diameter` (dimensionless) against time (s), sampled
-/// every 0.02 s until `end_time_s` from the first sample with fluid in the slab.
+/// every 0.02 s until `end_time_s` from the first sample with fluid falling through the slab.
 pub fn axis_offsets(height_over_d: f64, op: ViscosityOperator, end_time_s: f64) -> Result<Vec<[f64; 2]>, String> {
     let (diameter, scene) = jet_scene(height_over_d, op, end_time_s)?;
     let samples = (end_time_s / SAMPLE_EVERY_S).round() as usize;

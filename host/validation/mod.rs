@@ -439,7 +439,7 @@ pub fn jet_buckling(
     Ok(CaseResult {
         case,
         measure: format!(
-            "largest sideways offset / D of the fluid centroid between D/2 and 3D/2 above the plate, every 0.02 s to {end_time_s} s (the plot shows it against t); c = 20 m/s"
+            "largest sideways offset / D of the axis (the centroid of the downward flux between D/2 and 3D/2 above the plate), every 0.02 s to {end_time_s} s (the plot shows it against t); c = 20 m/s"
         ),
         error: offset,
         tolerance,
