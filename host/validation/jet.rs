@@ -15,9 +15,10 @@ const SAMPLE_EVERY_S: f64 = 0.02;
 /// Sideways offset of the jet's axis just above the plate (m): the horizontal distance from the
 /// nozzle axis (x = z = 0) of the centroid of the downward mass flux through the slab between
 /// D/2 and 3D/2 above the plate top `plate_y` (m), each particle there weighted by its
-/// downward speed. The rope is where the fluid falls: a coiling rope lays its fluid all around
-/// the axis, so the centroid of all the fluid in the slab stays near the axis however far the
-/// rope swings, and the pile it builds there barely moves. None while nothing falls there.
+/// downward speed. The rope is where the fluid falls: a folding or coiling rope lays its fluid
+/// on both sides of the axis, so the centroid of all the fluid in the slab stays near the axis
+/// however far the rope swings, and the pile it builds there barely moves. None while nothing
+/// falls there.
 pub fn axis_offset(snapshot: &Snapshot, plate_y: f64, diameter: f64) -> Option<f64> {
     let slab = (plate_y + 0.5 * diameter)..(plate_y + 1.5 * diameter);
     let (mut flux, mut x, mut z) = (0.0, 0.0, 0.0);
