@@ -358,16 +358,28 @@ fn the_mirrored_wall_fit_reproduces_linear_fields_next_to_a_wall() {
     assert_eq!((far.velocity, far.pressure), (Vec3::zero(), 0.0));
 }
 
+/// The mirrored-wall fit's velocity (m/s) at each of `points` (m) from the particles `p`, sorted
+/// into a neighbor grid over [-0.05, 0.15]^3 m with `fluid`'s support radius.
+fn fluid_samples(p: &mut coil::particles::Particles<f64>, fluid: &Fluid<f64>, points: &[[f64; 3]]) -> Vec<Vec3<f64>> {
+    use coil::neighbor_grid::NeighborGrid;
+    use coil_kernels::mirrored_wall::fluid_at;
+    use coil_kernels::view::ViewMut;
+    let mut grid = NeighborGrid::new([-0.05; 3], [0.15; 3], fluid.kernels.h, [false; 3], p.capacity());
+    grid.sort(p);
+    let n = p.len();
+    let (id, nb) = (p.id.clone(), grid.neighborhood(coil::particles::vec3_view(&p.position, n), Open));
+    let velocity = coil::particles::vec3_view_mut(&mut p.velocity, n);
+    let density = ViewMut::new(&mut p.density);
+    points.iter().map(|&x| fluid_at(x, &nb, &View::new(&id), &velocity, &density, fluid).velocity).collect()
+}
+
 /// At the edge of a free surface a mirror image may see a single fluid particle, or a few in a
 /// line: their offsets determine no slope, and the covariance left after removing the mean is
 /// rounding noise. The sample must be their mean velocity, never the noise's inverse (which
 /// was infinite or NaN for a cylinder's rim on a plate).
 #[test]
 fn the_mirrored_wall_fit_falls_back_to_the_mean_of_a_single_neighbor_or_a_line() {
-    use coil::neighbor_grid::NeighborGrid;
     use coil::particles::{ModelFields, Particles};
-    use coil_kernels::mirrored_wall::fluid_at;
-    use coil_kernels::view::ViewMut;
     let h = 0.025;
     let fluid = Fluid { boundary_count: 0, kernels: SmoothingKernels::new(h), ..fluid::<f64>() };
     let x = [0.0503, 0.0117, 0.0491];
@@ -382,18 +394,8 @@ fn the_mirrored_wall_fit_falls_back_to_the_mean_of_a_single_neighbor_or_a_line()
                 let r = h * (0.55 + 0.4 * ((k * 7 + m * 3) % 10) as f64 / 10.0);
                 p.push(m as u32, [0, 1, 2].map(|a| x[a] + r * dir[a] / norm), [0.0, -0.25, 0.5]);
             }
-            let mut grid = NeighborGrid::new([-0.05; 3], [0.15; 3], h, [false; 3], p.capacity());
-            grid.sort(&mut p);
-            let n = p.len();
-            let (id, nb) = (p.id.clone(), grid.neighborhood(coil::particles::vec3_view(&p.position, n), Open));
-            let velocity = coil::particles::vec3_view_mut(&mut p.velocity, n);
-            let density = ViewMut::new(&mut p.density);
-            let sample = fluid_at(x, &nb, &View::new(&id), &velocity, &density, &fluid);
-            assert!(
-                (sample.velocity - Vec3::new(0.0, -0.25, 0.5)).norm() < 1e-12,
-                "{line} in a line, direction {k}: {:?}",
-                sample.velocity
-            );
+            let velocity = fluid_samples(&mut p, &fluid, &[x])[0];
+            assert!((velocity - Vec3::new(0.0, -0.25, 0.5)).norm() < 1e-12, "{line} in a line, direction {k}: {velocity:?}");
         }
     }
 }
@@ -405,10 +407,7 @@ fn the_mirrored_wall_fit_falls_back_to_the_mean_of_a_single_neighbor_or_a_line()
 /// mean does. The fit without [`MAX_LEVERAGE`] left them by 15 times their range here.
 #[test]
 fn the_mirrored_wall_fit_does_not_extrapolate_across_a_single_layer() {
-    use coil::neighbor_grid::NeighborGrid;
     use coil::particles::{ModelFields, Particles};
-    use coil_kernels::mirrored_wall::fluid_at;
-    use coil_kernels::view::ViewMut;
     let (s, h) = (0.01, 0.02);
     let fluid = Fluid { boundary_count: 0, kernels: SmoothingKernels::new(h), ..fluid::<f64>() };
     let mut state = 5u64;
@@ -430,15 +429,9 @@ fn the_mirrored_wall_fit_does_not_extrapolate_across_a_single_layer() {
         let (lowest, highest) = (0..p.len()).fold(([f64::MAX; 3], [f64::MIN; 3]), |(lo, hi), i| {
             ([0, 1, 2].map(|a| lo[a].min(p.velocity[a][i])), [0, 1, 2].map(|a| hi[a].max(p.velocity[a][i])))
         });
-        let mut grid = NeighborGrid::new([-0.05; 3], [0.15; 3], h, [false; 3], p.capacity());
-        grid.sort(&mut p);
-        let n = p.len();
-        let (id, nb) = (p.id.clone(), grid.neighborhood(coil::particles::vec3_view(&p.position, n), Open));
-        let velocity = coil::particles::vec3_view_mut(&mut p.velocity, n);
-        let density = ViewMut::new(&mut p.density);
-        for _mirror in 0..20 {
-            let x = [s * (2.0 + 4.0 * uniform(&mut state)), 1.5 * s, s * (2.0 + 4.0 * uniform(&mut state))];
-            let v = fluid_at(x, &nb, &View::new(&id), &velocity, &density, &fluid).velocity;
+        let mirrors: Vec<[f64; 3]> =
+            (0..20).map(|_| [s * (2.0 + 4.0 * uniform(&mut state)), 1.5 * s, s * (2.0 + 4.0 * uniform(&mut state))]).collect();
+        for v in fluid_samples(&mut p, &fluid, &mirrors) {
             for (a, c) in [v.x, v.y, v.z].into_iter().enumerate() {
                 let range = highest[a] - lowest[a];
                 worst = worst.max((lowest[a] - c).max(c - highest[a]) / range);
