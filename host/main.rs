@@ -480,8 +480,8 @@ fn validate_command(quick: bool, only: &[ValidationGroup], out: &Path) -> Result
     }
     let torus_spacing = if quick { 0.04 } else { 0.03 };
     cases.push((ValidationGroup::Torus, true, Box::new(move || torus_ordering(torus_spacing, 0.3).map(|r| vec![r]))));
-    // The paper's operator is shown for comparison: at 8 and 10 across a particle of the thin
-    // current runs away before the radius doubles (README, Validation).
+    // The paper's operator is shown for comparison: it approaches the law too slowly to meet
+    // the exponent's 10 % at 8 and 10 across (README, Validation).
     let release_across = if quick { 8 } else { 10 };
     for &op in &[ViscosityOperator::Stress, ViscosityOperator::Laplacian, ViscosityOperator::Morris] {
         cases.push((ValidationGroup::Huppert, !paper(op), Box::new(move || huppert_spreading(release_across, op, Some(out)))));

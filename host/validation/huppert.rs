@@ -3,7 +3,7 @@
 //! similarity solution r_N(t) = 0.894 (g V^3 t / (3 nu))^(1/8).
 
 use super::scene_word;
-use super::snapshot::{snapshots, Snapshot};
+use super::snapshot::{snapshots_from, Snapshot};
 use crate::scene::{Scene, ViscosityOperator};
 
 /// |g| (m/s^2).
@@ -144,13 +144,14 @@ pub struct Spreading {
 /// times spaced evenly in ln t over its last three decades, and fits the samples whose radius
 /// has grown past 1.5 R0.
 pub fn simulate(release: &Release) -> Result<Spreading, String> {
+    // The particles do not depend on the end time, which depends on their volume.
     let probe = release.scene(1.0);
-    let volume_m3 = crate::setup::initial_particles(&probe, &probe.name).map_err(|e| e.to_string())?.fluid.len() as f64
-        * release.spacing().powi(3);
+    let initial = crate::setup::initial_particles(&probe, &probe.name).map_err(|e| e.to_string())?;
+    let volume_m3 = initial.fluid.len() as f64 * release.spacing().powi(3);
     let end = release.huppert_time(volume_m3, release.final_spread * release.radius_m);
     let samples = 60;
     let times: Vec<f64> = (0..samples).map(|k| end * 1e-3f64.powf(1.0 - k as f64 / (samples - 1) as f64)).collect();
-    let snaps = snapshots(&release.scene(end), &times, None)?;
+    let snaps = snapshots_from(&release.scene(end), &initial, &times, None)?;
     let radii: Vec<[f64; 2]> = snaps.iter().map(|s| [s.time_s, front_radius(s)]).collect();
     let late: Vec<[f64; 2]> = radii.iter().copied().filter(|p| p[1] >= 1.5 * release.radius_m).collect();
     if late.len() < 3 {
