@@ -26,14 +26,20 @@ pub struct NeighborGrid {
     chunk_offsets: Vec<u32>,
 }
 
+/// How far below the support radius (relative) a periodic axis's cells may fall: a period
+/// written in decimal, 0.0003 m for 3 h = 3 x 1e-4 m, is 3 h less a rounding. Pairs that the
+/// grid then misses lie beyond h (1 - 1e-9), where every kernel is below 1e-9 of its peak.
+pub const PERIODIC_ROUNDING: f64 = 1e-9;
+
 impl NeighborGrid {
     /// A grid of cells of edge `cell_size` (m, the support radius) over the domain box; along
-    /// the axes marked `periodic` the box length is split into whole cells of at least that edge.
+    /// the axes marked `periodic` the box length is split into whole cells of at least that edge,
+    /// less `PERIODIC_ROUNDING` of it.
     pub fn new(min: [f64; 3], max: [f64; 3], cell_size: f64, periodic: [bool; 3], capacity: usize) -> Self {
         let length = [0, 1, 2].map(|a| max[a] - min[a]);
         let dims = [0, 1, 2].map(|a| {
             let cells = length[a] / cell_size;
-            (if periodic[a] { cells.floor() } else { cells.ceil() } as u32).max(1)
+            (if periodic[a] { (cells * (1.0 + PERIODIC_ROUNDING)).floor() } else { cells.ceil() } as u32).max(1)
         });
         let inverse_cell_size = [0, 1, 2].map(|a| if periodic[a] { dims[a] as f64 / length[a] } else { 1.0 / cell_size });
         let grid = CellGrid { origin: min, inverse_cell_size, dims };

@@ -82,6 +82,9 @@ pub struct Material {
     /// How the pressure force weighs a pair's pressures.
     #[serde(default)]
     pub pressure_gradient: PressureGradient,
+    /// The kernel of the density sum, Eq. (5).
+    #[serde(default)]
+    pub density_kernel: DensityKernel,
     /// Initial particle spacing (m).
     pub particle_spacing_m: f64,
     /// Support radius h as a multiple of the spacing (2 gives about 33 neighbors).
@@ -127,6 +130,20 @@ impl PressureGradient {
             PressureGradient::Full => 1.0,
         }
     }
+}
+
+/// The kernel of the density sum, Eq. (5).
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum DensityKernel {
+    /// The paper's (Müller 2003's) poly6. Its gradient is not the spiky gradient of Eq. (7), so
+    /// the pressure force does no work against a potential, and a lattice stiffened by a high c
+    /// flutters where viscosity no longer damps the particle scale (measured by `coil tradeoff`).
+    #[default]
+    Poly6,
+    /// The spiky kernel, whose gradient Eq. (7) takes: the pressure force then derives from the
+    /// density it is computed from, and high-c lattices stay still.
+    Spiky,
 }
 
 /// Which discretisation of the viscous term.
@@ -537,7 +554,7 @@ impl Scene {
         }
         for a in (0..3).filter(|&a| d.periodic[a]) {
             let length = d.max_m[a] - d.min_m[a];
-            if length < 3.0 * self.support_radius() {
+            if length * (1.0 + crate::neighbor_grid::PERIODIC_ROUNDING) < 3.0 * self.support_radius() {
                 return err(
                     "domain.periodic",
                     format!(

@@ -1,6 +1,6 @@
 //! Initial particles of a scene: fluid blocks and boundary walls on the particle lattice.
 
-use crate::scene::{Boundary, Scene, SceneError};
+use crate::scene::{Boundary, DensityKernel, Scene, SceneError};
 use coil_kernels::smoothing::SmoothingKernels;
 use coil_kernels::{Real, Vec3};
 use std::collections::HashMap;
@@ -192,10 +192,10 @@ fn overlap(boundary: &[[f64; 3]], fluid: &[[f64; 3]], s: f64) -> Option<[f64; 3]
     })
 }
 
-/// Particle mass (kg) that makes the poly6 density of a full cubic lattice of spacing `s`
-/// equal rho0, so fluid at rest starts at zero pressure (m = rho0 s^3 would leave it a few
-/// percent off, since the lattice sum of W is not exactly 1/s^3).
-pub fn calibrated_mass(rest_density: f64, spacing: f64, support_radius: f64) -> f64 {
+/// Particle mass (kg) that makes the density (Eq. (5) with `kernel`) of a full cubic lattice of
+/// spacing `s` equal rho0, so fluid at rest starts at zero pressure (m = rho0 s^3 would leave
+/// it a few percent off, since the lattice sum of W is not exactly 1/s^3).
+pub fn calibrated_mass(rest_density: f64, spacing: f64, support_radius: f64, kernel: DensityKernel) -> f64 {
     let kernels = SmoothingKernels::<f64>::new(support_radius);
     let n = (support_radius / spacing).ceil() as i64;
     let mut sum = 0.0;
@@ -203,7 +203,10 @@ pub fn calibrated_mass(rest_density: f64, spacing: f64, support_radius: f64) -> 
         for j in -n..=n {
             for i in -n..=n {
                 let r2 = ((i * i + j * j + k * k) as f64) * spacing * spacing;
-                sum += kernels.poly6(r2);
+                sum += match kernel {
+                    DensityKernel::Poly6 => kernels.poly6(r2),
+                    DensityKernel::Spiky => kernels.spiky(r2),
+                };
             }
         }
     }
@@ -217,9 +220,14 @@ pub fn calibrated_mass(rest_density: f64, spacing: f64, support_radius: f64) -> 
 ///   10 % low), and the pressure force of Eq. (7) uses the same corrected gradient;
 /// - the viscosity-kernel sum of (f_j - f_i) lap W over f = y^2 gives lap f = 2 exactly (the raw
 ///   kernel gives 1.957), and so does Morris's.
-pub fn calibrated_kernels<R: Real>(rest_density: f64, spacing: f64, support_radius: f64) -> SmoothingKernels<R> {
+pub fn calibrated_kernels<R: Real>(
+    rest_density: f64,
+    spacing: f64,
+    support_radius: f64,
+    kernel: DensityKernel,
+) -> SmoothingKernels<R> {
     let raw = SmoothingKernels::<f64>::new(support_radius);
-    let volume = calibrated_mass(rest_density, spacing, support_radius) / rest_density;
+    let volume = calibrated_mass(rest_density, spacing, support_radius, kernel) / rest_density;
     let n = (support_radius / spacing).ceil() as i64;
     let (mut gradient, mut laplacian, mut morris) = (0.0, 0.0, 0.0);
     for k in -n..=n {

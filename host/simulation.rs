@@ -6,10 +6,10 @@ use crate::model::{CpuPasses, Model, ParticleState};
 use crate::neighbor_grid::NeighborGrid;
 use crate::parallel::launch;
 use crate::particles::{stress_view_mut, vec3_view, vec3_view_mut, view_mut, Particles};
-use crate::scene::{Scene, Walls};
+use crate::scene::{DensityKernel, Scene, Walls};
 use crate::setup::{calibrated_kernels, calibrated_mass, InitialParticles};
 use crate::time_step::{Limit, StabilityBound, TimeStepper};
-use coil_kernels::density::{density_pass, DensityArgs};
+use coil_kernels::density::{density_pass, DensityArgs, Poly6, Spiky};
 use coil_kernels::diagnostics::{range_figures, DiagnosticsArgs, StateFigures};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::{leapfrog_pass, LeapfrogArgs};
@@ -91,6 +91,8 @@ pub struct Simulation<R: Real, M: Model<R>> {
     /// Each wall particle's mirror image (m), x, y, z by id, when walls mirror the fluid
     /// (`Walls::Mirrored`); not allocated otherwise.
     pub wall_mirror: Option<[Vec<f64>; 3]>,
+    /// The kernel of Eq. (5): which monomorphised density pass each step launches.
+    pub density_kernel: DensityKernel,
 }
 
 impl<R: Real, M: Model<R>> Simulation<R, M> {
@@ -99,7 +101,7 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         let mat = &scene.material;
         let h = scene.support_radius();
         let s = mat.particle_spacing_m;
-        let mass = calibrated_mass(mat.rest_density_kg_m3, s, h);
+        let mass = calibrated_mass(mat.rest_density_kg_m3, s, h, mat.density_kernel);
         let inlets: Vec<Inlet> = scene.inlets.iter().map(|c| Inlet::new(c, s, h, mass, mat.rest_density_kg_m3)).collect();
         let fluid_capacity = scene.simulation.max_fluid_particles.unwrap_or(0).max(initial.fluid.len());
         let boundary_count = initial.boundary.len();
@@ -118,7 +120,7 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             pressure_floor: R::from_f64(if mat.clamp_negative_pressure { 0.0 } else { f64::NEG_INFINITY }),
             pressure_pair_weight: R::from_f64(mat.pressure_gradient.pair_weight()),
             gravity: Vec3::new(R::from_f64(g[0]), R::from_f64(g[1]), R::from_f64(g[2])),
-            kernels: calibrated_kernels(mat.rest_density_kg_m3, s, h),
+            kernels: calibrated_kernels(mat.rest_density_kg_m3, s, h, mat.density_kernel),
             boundary_count: boundary_count as u32,
         };
         let ts = &scene.simulation.time_step;
@@ -156,6 +158,7 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             last_limit: Limit::Acoustic,
             wall_mirror: (scene.simulation.walls == Walls::Mirrored)
                 .then(|| [0, 1, 2].map(|a| initial.boundary_mirror.iter().map(|m| m[a]).collect())),
+            density_kernel: mat.density_kernel,
         };
         sim.sort_and_density();
         sim.diagnostics.max_speed = jet.max(initial_speed);
@@ -247,7 +250,10 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             fluid: self.fluid,
             density: view_mut(&mut p.density, n),
         };
-        launch(n, |i| density_pass(i, &args));
+        match self.density_kernel {
+            DensityKernel::Poly6 => launch(n, |i| density_pass::<R, Poly6, T>(i, &args)),
+            DensityKernel::Spiky => launch(n, |i| density_pass::<R, Spiky, T>(i, &args)),
+        }
     }
 
     /// Algorithm 1, lines 9-19, after the density: mirrored walls (when asked), stress,

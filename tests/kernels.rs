@@ -1,5 +1,6 @@
 //! The kernels' building blocks against analytic values.
 
+use coil::scene::DensityKernel;
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::{leapfrog_pass, LeapfrogArgs};
@@ -18,12 +19,22 @@ fn radial_integral(h: f64, f: impl Fn(f64) -> f64) -> f64 {
 }
 
 #[test]
-fn poly6_and_spiky_integrate_to_one() {
+fn poly6_and_spiky_integrate_to_one_and_the_spiky_gradient_is_spikys_derivative() {
     let h = 0.037;
     let k = SmoothingKernels::<f64>::new(h);
     // Midpoint rule error is O((dr/h)^2) = 2.5e-9.
     let poly6 = radial_integral(h, |r| k.poly6(r * r));
     assert!((poly6 - 1.0).abs() < 1e-6, "poly6 integrates to {poly6}");
+    let spiky = radial_integral(h, |r| k.spiky(r * r));
+    assert!((spiky - 1.0).abs() < 1e-6, "spiky integrates to {spiky}");
+    // The spiky gradient is the derivative of spiky W (central differences, error O(dr^2)),
+    // which makes the pressure force of a spiky density the gradient of one potential.
+    let dr = 1e-6 * h;
+    for r in [0.1, 0.4, 0.7, 0.95].map(|f| f * h) {
+        let slope = (k.spiky((r + dr) * (r + dr)) - k.spiky((r - dr) * (r - dr))) / (2.0 * dr);
+        let g = k.spiky_gradient(Vec3::new(r, 0.0, 0.0), r * r).x;
+        assert!((g - slope).abs() < 1e-6 * slope.abs(), "at r = {r}: gradient {g}, dW/dr {slope}");
+    }
     // For a kernel normalised to 1, int grad W · x dV = -3 int W dV = -3 (divergence theorem).
     let div_moment = radial_integral(h, |r| {
         let g = k.spiky_gradient(Vec3::new(r, 0.0, 0.0), r * r);
@@ -46,7 +57,7 @@ fn viscosity_laplacian_matches_its_closed_form_integral() {
 /// V (f(x_j) - f(0)) weight(r^2), with the layers at y = +s and -s shifted along x by +shift
 /// and -shift (a lattice sheared by half its spacing at shift = s / 2).
 fn lattice_laplacian(s: f64, h: f64, shift: f64, f: impl Fn(f64, f64, f64) -> f64, weight: impl Fn(f64) -> f64) -> f64 {
-    let volume = coil::setup::calibrated_mass(1000.0, s, h) / 1000.0;
+    let volume = coil::setup::calibrated_mass(1000.0, s, h, DensityKernel::Poly6) / 1000.0;
     let n = (h / s).ceil() as i64 + 1;
     let mut sum = 0.0;
     for k in -n..=n {
@@ -66,7 +77,7 @@ fn lattice_laplacian(s: f64, h: f64, shift: f64, f: impl Fn(f64, f64, f64) -> f6
 #[test]
 fn morris_laplacian_keeps_its_calibration_on_a_sheared_lattice() {
     let (s, h) = (0.01, 0.02);
-    let k = coil::setup::calibrated_kernels::<f64>(1000.0, s, h);
+    let k = coil::setup::calibrated_kernels::<f64>(1000.0, s, h, DensityKernel::Poly6);
     let y2 = |_: f64, y: f64, _: f64| y * y;
     let xz = |x: f64, _: f64, z: f64| x * x + z * z;
     for (name, weight) in

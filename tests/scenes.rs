@@ -151,6 +151,27 @@ fn a_nozzle_wobbling_a_spacing_or_a_tube_outside_the_domain_is_refused() {
     }
 }
 
+/// A period written in decimal as exactly 3 h (0.0003 m for h = 2 x 5e-5 m) is 3 h less a
+/// rounding in binary; it is accepted and split into 3 cells. A period a spacing short is not.
+#[test]
+fn a_period_of_three_support_radii_written_in_decimal_is_accepted() {
+    use coil::neighbor_grid::NeighborGrid;
+    let text = |length: &str| {
+        format!(
+            "name = \"channel\"\n[material]\nparticle_spacing_m = 5e-5\n[material.viscosity]\nnu0_m2_s = 1e-6\n\
+             [domain]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [{length}, 0.001, {length}]\nperiodic = [true, false, true]\n\
+             [simulation]\nend_time_s = 0.1\n[[fluid_block]]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [{length}, 0.001, {length}]\n"
+        )
+    };
+    assert!(0.0003 < 3.0 * (5e-5 * 2.0), "the decimal period is below 3 h in binary");
+    let scene = Scene::parse(&text("0.0003"), "channel.toml").expect("a period of 3 h is valid");
+    let d = &scene.domain;
+    let grid = NeighborGrid::new(d.min_m, d.max_m, scene.support_radius(), d.periodic, 1);
+    assert_eq!((grid.grid.dims[0], grid.grid.dims[2]), (3, 3));
+    let e = Scene::parse(&text("0.00025"), "channel.toml").expect_err("5 spacings is 2.5 h");
+    assert!(e.field == "domain.periodic" && e.reason.contains("less than 3 support radii"), "{e}");
+}
+
 #[test]
 fn set_overrides_any_field_with_the_files_validation() {
     use coil::scene_override::Override;
@@ -206,7 +227,7 @@ fn check_reports_counts_the_equation_10_bound_and_a_calibrated_estimate() {
     // The jet: no fluid at t = 0; the inlet delivers rho0 A U / m particles per second.
     let jet = Scene::load(&dir.join("round_jet.toml")).expect("valid");
     let r = check(&jet, "round_jet.toml", None, std::time::Duration::from_millis(200)).expect("valid");
-    let mass = coil::setup::calibrated_mass(1000.0, 0.004, 0.008);
+    let mass = coil::setup::calibrated_mass(1000.0, 0.004, 0.008, coil::scene::DensityKernel::Poly6);
     let rate = 1000.0 * std::f64::consts::PI * 0.01 * 0.01 * 1.0 / mass;
     assert!(r.initial_fluid == 0 && (r.inlet_rate - rate).abs() < 1e-9 * rate, "{} vs {rate}", r.inlet_rate);
     assert_eq!(r.final_fluid, ((rate * 0.8) as usize).min(4200));

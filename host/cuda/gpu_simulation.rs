@@ -11,12 +11,13 @@ use super::device_array::{vec3_view, vec3_view_mut, vec3_zeros, DeviceArray, Dev
 use super::gpu::{ByValue, CudaError, Gpu};
 use crate::model::{Model, ParticleState, Passes};
 use crate::particles::{ModelFields, Particles};
+use crate::scene::DensityKernel;
 use crate::simulation::{inject, Instability, Simulation};
 use crate::time_step::Limit;
 use coil_kernels::acceleration::{AccelerationArgs, ViscousOperator};
 use coil_kernels::cell_grid::{HashArgs, Neighborhood};
 use coil_kernels::cross_viscosity::Rheology;
-use coil_kernels::density::DensityArgs;
+use coil_kernels::density::{DensityArgs, DensityKernel as _, Poly6, Spiky};
 use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
 use coil_kernels::leapfrog::LeapfrogArgs;
 use coil_kernels::mirrored_wall::MirroredWallArgs;
@@ -510,8 +511,12 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
             density: self.device.density.view_mut(n),
         };
         let count = self.count();
-        // SAFETY: density_<T>_<R>(count, args).
-        unsafe { self.gpu.launch(kernel::<R>("density", "", T::NAME), n as u32, &[&count, &ByValue(args)]) }
+        let variant = match self.host.density_kernel {
+            DensityKernel::Poly6 => Poly6::NAME,
+            DensityKernel::Spiky => Spiky::NAME,
+        };
+        // SAFETY: density_<K>_<T>_<R>(count, args).
+        unsafe { self.gpu.launch(kernel::<R>("density", variant, T::NAME), n as u32, &[&count, &ByValue(args)]) }
     }
 
     /// Wall particles mirror the fluid, when the scene asks (see `coil_kernels::mirrored_wall`).

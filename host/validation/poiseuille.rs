@@ -5,7 +5,7 @@
 
 use super::scene_word;
 use super::snapshot::snapshots;
-use crate::scene::{Precision, Scene, ViscosityOperator, Walls};
+use crate::scene::{DensityKernel, Precision, Scene, ViscosityOperator, Walls};
 use std::f64::consts::PI;
 
 /// Morris et al. 1997's channel: L = 1 mm, nu = 1e-6 m^2/s, F = 2e-4 m/s^2, rho0 = 1000
@@ -28,6 +28,8 @@ pub struct Channel {
     pub sound_speed_m_s: f64,
     /// Multiplies the automatic dt.
     pub safety_factor: f64,
+    /// W of Eq. (5).
+    pub density_kernel: DensityKernel,
 }
 
 /// The Cross model, Eq. (3), by its constants.
@@ -60,6 +62,7 @@ impl Channel {
             // Mach 0.01 at u_max = 2.5e-5 m/s; dt stays set by the viscous term of Eq. (10).
             sound_speed_m_s: 2.5e-3,
             safety_factor: 1.0,
+            density_kernel: DensityKernel::Poly6,
         }
     }
 
@@ -79,6 +82,7 @@ impl Channel {
         let s = self.spacing();
         let (l, w) = (self.gap_m, 6.0 * s);
         let (operator, precision, walls) = (scene_word(self.operator), scene_word(self.precision), scene_word(self.walls));
+        let density_kernel = scene_word(self.density_kernel);
         let cross = self
             .cross
             .map(|c| format!("nu_inf_m2_s = {:e}\ncross_k_s = {:e}\ncross_n = {:e}\n", c.nu_inf_m2_s, c.k_s, c.n))
@@ -92,6 +96,7 @@ sound_speed_m_s = {c:e}
 particle_spacing_m = {s:e}
 support_radius_factor = 2.0
 gravity_m_s2 = [{f:e}, 0.0, 0.0]
+density_kernel = "{density_kernel}"
 [material.viscosity]
 operator = "{operator}"
 nu0_m2_s = {nu0:e}

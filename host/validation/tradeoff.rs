@@ -6,7 +6,7 @@
 use super::poiseuille::{Channel, CrossLaw};
 use super::{cross_poiseuille_in, startup_poiseuille_in};
 use crate::plot::{Axis, Chart, Line, Series, PALETTE};
-use crate::scene::{Precision, ViscosityOperator, Walls};
+use crate::scene::{DensityKernel, Precision, ViscosityOperator, Walls};
 
 /// One run of a sweep.
 #[derive(Debug, Clone)]
@@ -62,6 +62,17 @@ pub fn trials(quick: bool) -> Vec<Trial> {
     for &mach in machs {
         let c = base.newtonian_peak() / mach;
         add("start-up", "sound speed", format!("c = {c:.1e} m/s (Mach {mach})"), Channel { sound_speed_m_s: c, ..base });
+    }
+    let spiky = Channel { density_kernel: DensityKernel::Spiky, ..base };
+    add("start-up", "density kernel", "spiky".into(), spiky);
+    if !quick {
+        let c = base.newtonian_peak() / 1e-4;
+        add(
+            "start-up",
+            "density kernel",
+            format!("spiky, c = {c:.1e} m/s (Mach 0.0001)"),
+            Channel { sound_speed_m_s: c, ..spiky },
+        );
     }
     add("start-up", "precision", "f32".into(), Channel { precision: Precision::F32, ..base });
     add("start-up", "walls", "paper's (at rest)".into(), Channel { walls: Walls::Paper, ..base });

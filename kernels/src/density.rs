@@ -3,15 +3,52 @@
 use crate::cell_grid::Neighborhood;
 use crate::fluid::Fluid;
 use crate::real::Real;
+use crate::smoothing::SmoothingKernels;
 use crate::topology::{Open, Topology};
 use crate::view::ViewMut;
+use core::fmt::Debug;
 
-/// Density by direct summation with poly6, Eq. (5): rho_i = sum_j m_j W(x_ij) (kg/m^3).
+/// The kernel W of the density sum, Eq. (5), fixed for a run.
+pub trait DensityKernel: Copy + Debug + Default + Send + Sync + 'static {
+    /// Variant of the PTX entries built for this kernel ("" for the paper's poly6).
+    const NAME: &'static str;
+    /// W(r) (1/m^3) at squared distance `r2` (m^2).
+    fn weight<R: Real>(kernels: &SmoothingKernels<R>, r2: R) -> R;
+}
+
+/// The paper's (Müller 2003's) poly6. It is not the kernel whose gradient Eq. (7) takes (the
+/// spiky one), so the pressure force is not the gradient of any potential of the positions: a
+/// lattice stiffened by a high c flutters, the slowest-damped modes growing where viscosity at
+/// the particle scale no longer damps them (`coil tradeoff`'s Mach 1e-4 channel).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Poly6;
+
+impl DensityKernel for Poly6 {
+    const NAME: &'static str = "";
+    #[inline(always)]
+    fn weight<R: Real>(kernels: &SmoothingKernels<R>, r2: R) -> R {
+        kernels.poly6(r2)
+    }
+}
+
+/// The spiky kernel, whose gradient Eq. (7), (8) and (9) already use.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Spiky;
+
+impl DensityKernel for Spiky {
+    const NAME: &'static str = "spiky";
+    #[inline(always)]
+    fn weight<R: Real>(kernels: &SmoothingKernels<R>, r2: R) -> R {
+        kernels.spiky(r2)
+    }
+}
+
+/// Density by direct summation, Eq. (5): rho_i = sum_j m_j W(x_ij) (kg/m^3), W being `K`.
 /// Boundary particles get theirs the same way (paper Sec. III-B).
 #[inline(always)]
-pub fn density<R: Real, T: Topology>(i: usize, neighborhood: &Neighborhood<T>, fluid: &Fluid<R>) -> R {
+pub fn density<R: Real, K: DensityKernel, T: Topology>(i: usize, neighborhood: &Neighborhood<T>, fluid: &Fluid<R>) -> R {
     let mut sum = R::ZERO;
-    neighborhood.for_each_neighbor(i, fluid.kernels.h2, |_, _, r2: R| sum += fluid.kernels.poly6(r2));
+    neighborhood.for_each_neighbor(i, fluid.kernels.h2, |_, _, r2: R| sum += K::weight(&fluid.kernels, r2));
     sum * fluid.mass
 }
 
@@ -30,10 +67,10 @@ pub struct DensityArgs<'a, R, T = Open> {
     pub density: ViewMut<'a, R>,
 }
 
-/// The density pass for particle `i`. Pressure is not stored: Eq. (6) is cheaper to evaluate
-/// where it is read than to load.
+/// The density pass for particle `i` with the density kernel `K`. Pressure is not stored:
+/// Eq. (6) is cheaper to evaluate where it is read than to load.
 #[inline(always)]
-pub fn density_pass<R: Real, T: Topology>(i: usize, a: &DensityArgs<R, T>) {
+pub fn density_pass<R: Real, K: DensityKernel, T: Topology>(i: usize, a: &DensityArgs<R, T>) {
     // SAFETY: invocation i owns entry i.
-    unsafe { a.density.write(i, density(i, &a.neighborhood, &a.fluid)) };
+    unsafe { a.density.write(i, density::<R, K, T>(i, &a.neighborhood, &a.fluid)) };
 }

@@ -10,7 +10,7 @@ use crate::acceleration::{acceleration_pass, AccelerationArgs, MorrisViscosity, 
 use crate::cell_grid::{hash_pass, HashArgs};
 use crate::counting_sort::{chunk_total, count_particle, gather, scan_chunk, scan_chunk_offsets, scatter, sort_bucket, Counters};
 use crate::cross_viscosity::{Cross, Newtonian};
-use crate::density::{density_pass, DensityArgs};
+use crate::density::{density_pass, DensityArgs, Poly6, Spiky};
 use crate::diagnostics::{diagnostics_pass, DiagnosticsArgs, StateFigures};
 use crate::leapfrog::{leapfrog_pass, LeapfrogArgs};
 use crate::mirrored_wall::{mirrored_wall_pass, MirroredWallArgs};
@@ -56,8 +56,10 @@ macro_rules! per_topology_kernels {
 }
 
 per_index_kernel!(hash, HashArgs<'static>, hash_pass);
-per_topology_kernels!(density_f32, density_periodic_f32, DensityArgs<f32>, density_pass<f32>);
-per_topology_kernels!(density_f64, density_periodic_f64, DensityArgs<f64>, density_pass<f64>);
+per_topology_kernels!(density_f32, density_periodic_f32, DensityArgs<f32>, density_pass<f32, Poly6>);
+per_topology_kernels!(density_f64, density_periodic_f64, DensityArgs<f64>, density_pass<f64, Poly6>);
+per_topology_kernels!(density_spiky_f32, density_spiky_periodic_f32, DensityArgs<f32>, density_pass<f32, Spiky>);
+per_topology_kernels!(density_spiky_f64, density_spiky_periodic_f64, DensityArgs<f64>, density_pass<f64, Spiky>);
 per_topology_kernels!(mirrored_wall_f32, mirrored_wall_periodic_f32, MirroredWallArgs<f32>, mirrored_wall_pass<f32>);
 per_topology_kernels!(mirrored_wall_f64, mirrored_wall_periodic_f64, MirroredWallArgs<f64>, mirrored_wall_pass<f64>);
 per_topology_kernels!(

@@ -12,6 +12,7 @@ pub struct SmoothingKernels<R> {
     /// h^2 (m^2).
     pub h2: R,
     poly6_coefficient: R,
+    spiky_coefficient: R,
     spiky_gradient_coefficient: R,
     viscosity_laplacian_coefficient: R,
     morris_laplacian_coefficient: R,
@@ -26,6 +27,7 @@ impl<R: Real> SmoothingKernels<R> {
             h: R::from_f64(h),
             h2: R::from_f64(h * h),
             poly6_coefficient: R::from_f64(315.0 / (64.0 * pi * h6 * h3)),
+            spiky_coefficient: R::from_f64(15.0 / (pi * h6)),
             spiky_gradient_coefficient: R::from_f64(-45.0 / (pi * h6)),
             viscosity_laplacian_coefficient: R::from_f64(45.0 / (pi * h6)),
             morris_laplacian_coefficient: R::from_f64(90.0 / (pi * h6)),
@@ -50,6 +52,18 @@ impl<R: Real> SmoothingKernels<R> {
         if r2 < self.h2 {
             let d = self.h2 - r2;
             self.poly6_coefficient * d * d * d
+        } else {
+            R::ZERO
+        }
+    }
+
+    /// spiky: W(r) = 15 / (pi h^6) (h - r)^3 for r < h (1/m^3). Eq. (5) with it instead of
+    /// poly6 makes the density the potential whose gradient Eq. (7) takes.
+    #[inline(always)]
+    pub fn spiky(&self, r2: R) -> R {
+        if r2 < self.h2 {
+            let d = self.h - r2.sqrt();
+            self.spiky_coefficient * d * d * d
         } else {
             R::ZERO
         }
