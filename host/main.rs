@@ -145,8 +145,8 @@ enum Command {
         out: PathBuf,
     },
     /// Measure what each speed-for-accuracy knob buys on the two Poiseuille cases (resolution,
-    /// operator, dt safety factor, sound speed, precision, walls): error against the reference
-    /// and wall time per trial; writes tradeoff.md, tradeoff.csv and tradeoff.png (error against
+    /// operator, dt safety factor, sound speed, precision, walls, density kernel): error against
+    /// the reference and wall time per trial; writes tradeoff.md, tradeoff.csv and tradeoff.png (error against
     /// time, the Pareto front drawn).
     Tradeoff {
         /// A few coarse trials (under a minute) instead of the full sweep (about 8 minutes).

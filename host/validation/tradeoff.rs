@@ -133,7 +133,7 @@ pub fn mark_pareto(m: &mut [Measured]) {
 pub fn markdown(m: &[Measured]) -> String {
     let mut s = String::from(
         "# coil tradeoff\n\nEach row changes one knob of the base (start-up: Morris et al.'s channel, Laplacian \
-         operator, 20 across, mirrored walls, f64, Mach 0.01, dt at the Eq. (10) bound; Cross: K = 10 s, n = 0.5, \
+         operator, 20 across, mirrored walls, f64, Mach 0.01, poly6 density, dt at the Eq. (10) bound; Cross: K = 10 s, n = 0.5, \
          paper's operator, 10 across). Error: L-infinity against the reference over the peak speed. \
          `*`: on the Pareto front of its case (errors within 1 % count as equal).\n\n\
          | case | knob | setting | error | wall s | front |\n|---|---|---|---:|---:|---|\n",
