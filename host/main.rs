@@ -146,8 +146,8 @@ enum Command {
     },
     /// Measure what each speed-for-accuracy knob buys on the two Poiseuille cases (resolution,
     /// operator, dt safety factor, sound speed, precision, walls, density kernel): error against
-    /// the reference and wall time per trial; writes tradeoff.md, tradeoff.csv and tradeoff.png (error against
-    /// time, the Pareto front drawn).
+    /// the reference and wall time per trial; writes tradeoff.md, tradeoff.csv and tradeoff.png
+    /// (error against time, the Pareto front drawn).
     Tradeoff {
         /// A few coarse trials (under a minute) instead of the full sweep (about 8 minutes).
         #[arg(long)]
@@ -487,10 +487,12 @@ fn validate_command(quick: bool, only: &[ValidationGroup], out: &Path) -> Result
         cases.push((ValidationGroup::Huppert, !paper(op), Box::new(move || huppert_spreading(release_across, op, Some(out)))));
     }
     if !quick {
-        // Fig. 6: the paper's operator buckles where Müller's Laplacian, at the same parameters,
-        // is measured for comparison.
+        // Fig. 6: the paper's operator buckles where Müller's Laplacian and Morris's, at the
+        // same parameters and from both heights, are measured for comparison.
         let jets = [(12.0, ViscosityOperator::Stress, true, true), (3.0, ViscosityOperator::Stress, false, true)];
-        let fig6 = [(12.0, ViscosityOperator::Laplacian, true, false)];
+        let fig6 = [ViscosityOperator::Laplacian, ViscosityOperator::Morris]
+            .into_iter()
+            .flat_map(|op| [(12.0, op, true, false), (3.0, op, false, false)]);
         for (height_over_d, op, buckles, binding) in jets.into_iter().chain(fig6) {
             cases.push((
                 ValidationGroup::Jet,

@@ -137,12 +137,13 @@ impl PressureGradient {
 #[serde(rename_all = "snake_case")]
 pub enum DensityKernel {
     /// The paper's (Müller 2003's) poly6. Its gradient is not the spiky gradient of Eq. (7), so
-    /// the pressure force does no work against a potential, and a lattice stiffened by a high c
-    /// flutters where viscosity no longer damps the particle scale (measured by `coil tradeoff`).
+    /// the pressure force does not follow the gradient of the density it comes from, and a
+    /// lattice stiffened by a high c flutters where viscosity no longer damps the particle scale
+    /// (measured by `coil tradeoff`).
     #[default]
     Poly6,
-    /// The spiky kernel, whose gradient Eq. (7) takes: the pressure force then derives from the
-    /// density it is computed from, and high-c lattices stay still.
+    /// The spiky kernel, whose gradient Eq. (7) takes: the pressure force then follows the
+    /// gradient of the density it comes from, and high-c lattices stay still.
     Spiky,
 }
 

@@ -17,9 +17,9 @@ pub trait DensityKernel: Copy + Debug + Default + Send + Sync + 'static {
 }
 
 /// The paper's (Müller 2003's) poly6. It is not the kernel whose gradient Eq. (7) takes (the
-/// spiky one), so the pressure force is not the gradient of any potential of the positions: a
-/// lattice stiffened by a high c flutters, the slowest-damped modes growing where viscosity at
-/// the particle scale no longer damps them (`coil tradeoff`'s Mach 1e-4 channel).
+/// spiky one), so the pressure force does not follow the gradient of the density it comes
+/// from, and a lattice stiffened by a high c flutters where viscosity no longer damps the
+/// particle scale (`coil tradeoff`'s Mach 1e-4 channel).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Poly6;
 
