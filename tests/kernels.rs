@@ -27,8 +27,8 @@ fn poly6_and_spiky_integrate_to_one_and_the_spiky_gradient_is_spikys_derivative(
     assert!((poly6 - 1.0).abs() < 1e-6, "poly6 integrates to {poly6}");
     let spiky = radial_integral(h, |r| k.spiky(r * r));
     assert!((spiky - 1.0).abs() < 1e-6, "spiky integrates to {spiky}");
-    // The spiky gradient is the derivative of spiky W (central differences, error O(dr^2)),
-    // which makes the pressure force of a spiky density the gradient of one potential.
+    // The spiky gradient is the derivative of spiky W (central differences, error O(dr^2)), so
+    // with a spiky density the pressure force follows the gradient of the density.
     let dr = 1e-6 * h;
     for r in [0.1, 0.4, 0.7, 0.95].map(|f| f * h) {
         let slope = (k.spiky((r + dr) * (r + dr)) - k.spiky((r - dr) * (r - dr))) / (2.0 * dr);

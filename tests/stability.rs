@@ -222,8 +222,8 @@ fn an_empty_scene_and_a_single_particle_run_cleanly() {
 
 /// Morris et al.'s channel at 10 across and Mach 1e-4 (c = 0.25 m/s, c s / nu = 25): the
 /// acoustic term sets dt and pressure forces outweigh viscous ones at the particle scale.
-/// With the paper's poly6 density the pressure force is not the gradient of the density it
-/// comes from, and the lattice flutters out of round-off: by t = 0.6 s the wall-normal speed
+/// With the paper's poly6 density the pressure force does not follow the gradient of the
+/// density it comes from, and the lattice flutters out of round-off: by t = 0.6 s the wall-normal speed
 /// is above a tenth of the peak (it passed 30 times the peak when measured). With the spiky
 /// density, whose gradient Eq. (7) takes, it stays below 1e-3 of the peak and the profile
 /// within the start-up case's 3 % of the series.
