@@ -176,6 +176,13 @@ fn both<R: Real, M: Model<R>>(gpu: Gpu, scene: &Scene, model: M, steps: usize) -
     (cpu, on_gpu)
 }
 
+/// The largest f64 position difference (m) between the CPU and the GPU after 50 steps of
+/// `scene` with `model`; None without a device.
+fn f64_difference_after_50_steps<M: Model<f64>>(scene: &Scene, model: M) -> Option<f64> {
+    let (cpu, on_gpu) = both::<f64, _>(device()?, scene, model, 50);
+    Some(largest_position_difference(&state_by_id(&cpu), &state_by_id(&on_gpu.host)))
+}
+
 /// One step: the sort is integer work on identical positions, so the particle order must be
 /// identical; the floats differ only by the device's fused multiply-adds.
 #[test]
@@ -214,11 +221,9 @@ fn a_scene_on_the_gpu_agrees_with_the_cpu() {
 /// the same order on both, so f64 positions agree as closely as without it.
 #[test]
 fn mirrored_walls_on_the_gpu_agree_with_the_cpu() {
-    let Some(gpu) = device() else { return };
     let mut scene = dam_break();
     scene.simulation.walls = coil::scene::Walls::Mirrored;
-    let (cpu, on_gpu) = both::<f64, _>(gpu, &scene, cross::<f64>(&scene), 50);
-    let worst = largest_position_difference(&state_by_id(&cpu), &state_by_id(&on_gpu.host));
+    let Some(worst) = f64_difference_after_50_steps(&scene, cross::<f64>(&scene)) else { return };
     println!("mirrored walls, f64: largest position difference after 50 steps {worst:.3e} m");
     assert!(worst <= 1e-10, "positions differ by {worst:.3e} m");
 }
@@ -227,11 +232,9 @@ fn mirrored_walls_on_the_gpu_agree_with_the_cpu() {
 /// with poly6.
 #[test]
 fn the_spiky_density_on_the_gpu_agrees_with_the_cpu() {
-    let Some(gpu) = device() else { return };
     let mut scene = dam_break();
     scene.material.density_kernel = coil::scene::DensityKernel::Spiky;
-    let (cpu, on_gpu) = both::<f64, _>(gpu, &scene, cross::<f64>(&scene), 50);
-    let worst = largest_position_difference(&state_by_id(&cpu), &state_by_id(&on_gpu.host));
+    let Some(worst) = f64_difference_after_50_steps(&scene, cross::<f64>(&scene)) else { return };
     println!("spiky density, f64: largest position difference after 50 steps {worst:.3e} m");
     assert!(worst <= 1e-10, "positions differ by {worst:.3e} m");
 }
@@ -240,14 +243,11 @@ fn the_spiky_density_on_the_gpu_agrees_with_the_cpu() {
 /// extra shear-viscosity pass): f64 positions agree as closely as under the paper's operator.
 #[test]
 fn morris_operators_on_the_gpu_agree_with_the_cpu() {
-    fn worst<M: Model<f64>>(scene: &Scene, model: M) -> Option<f64> {
-        let (cpu, on_gpu) = both::<f64, _>(device()?, scene, model, 50);
-        Some(largest_position_difference(&state_by_id(&cpu), &state_by_id(&on_gpu.host)))
-    }
     let scene = dam_break();
     let newtonian = MorrisModel(Newtonian { nu0: scene.material.viscosity.nu0_m2_s });
-    let Some(constant) = worst(&scene, newtonian) else { return };
-    let Some(thinning) = worst(&scene, ShearThinningMorrisModel(cross_law::<f64>(&scene.material.viscosity))) else { return };
+    let Some(constant) = f64_difference_after_50_steps(&scene, newtonian) else { return };
+    let thinning = ShearThinningMorrisModel(cross_law::<f64>(&scene.material.viscosity));
+    let Some(thinning) = f64_difference_after_50_steps(&scene, thinning) else { return };
     println!("Morris, f64: largest position difference after 50 steps {constant:.3e} m (nu0), {thinning:.3e} m (Cross)");
     assert!(constant <= 1e-10 && thinning <= 1e-10, "positions differ by {constant:.3e} / {thinning:.3e} m");
 }
