@@ -289,15 +289,16 @@ pub fn compulsory_bytes(real: usize, fields: ModelFields, particles: f64, cells:
     // Gathers position, velocity, half-step velocity and id through the order array.
     let reorder = 2.0 * (p + 6.0 * r + 4.0) + 4.0;
     let density = p + r;
-    // Positions, velocity and density read; stress or viscosity written, then read.
-    let stress_pass = if fields.stress { p + 4.0 * r + 6.0 * r } else { 0.0 };
-    let viscosity_pass = if fields.viscosity { p + 4.0 * r + r } else { 0.0 };
-    let acceleration = p + 4.0 * r + if fields.stress { 6.0 * r } else { 0.0 } + if fields.viscosity { r } else { 0.0 } + 3.0 * r;
+    // Positions, velocity and density read; stress, velocity gradient or viscosity written in
+    // one pass, then read.
+    let gradient = if fields.velocity_gradient { 9.0 * r } else { 0.0 };
+    let written = if fields.stress { 6.0 * r } else { 0.0 } + gradient + if fields.viscosity { r } else { 0.0 };
+    let gradient_pass = if written > 0.0 { p + 4.0 * r + written } else { 0.0 };
+    let acceleration = p + 4.0 * r + written + 3.0 * r;
     let leapfrog = 2.0 * (p + 6.0 * r);
     // Counters cleared, counted and scanned; cell starts written and read.
     let grid = 4.0 * 4.0;
-    particles * (hash + histogram_and_scatter + reorder + density + stress_pass + viscosity_pass + acceleration + leapfrog)
-        + cells * grid
+    particles * (hash + histogram_and_scatter + reorder + density + gradient_pass + acceleration + leapfrog) + cells * grid
 }
 
 /// The CPU's model name and the worker threads, for the report.

@@ -1,6 +1,7 @@
 //! The physics variant of a run, chosen once from the scene: the paper's stress operator with a
-//! Newtonian or Cross rheology, Müller's Laplacian (Newtonian), or Morris's operator with a
-//! constant viscosity or a shear-thinning one per particle. Each is a type, so the CPU loops and
+//! Newtonian or Cross rheology, without or with hourglass control, Müller's Laplacian
+//! (Newtonian), or Morris's operator with a constant viscosity or a shear-thinning one per
+//! particle. Each is a type, so the CPU loops and
 //! the GPU kernels of a run contain only the physics it uses.
 
 use crate::parallel::launch;
@@ -12,10 +13,11 @@ use coil_kernels::acceleration::{
 use coil_kernels::cell_grid::Neighborhood;
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
+use coil_kernels::hourglass_control::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
 use coil_kernels::shear_viscosity::{shear_viscosity_pass, ShearViscosityArgs};
 use coil_kernels::topology::{Open, Topology};
 use coil_kernels::velocity_gradient::{stress_pass, StressArgs};
-use coil_kernels::view::{SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
+use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::Real;
 
 /// A viscosity operator and law, fixed for a run.
@@ -43,6 +45,8 @@ pub struct ParticleState<'a, R, T = Open> {
     pub stress: Option<SymTensorViewMut<'a, R>>,
     /// Present when the model uses a viscosity per particle (`Model::FIELDS`).
     pub viscosity: Option<ViewMut<'a, R>>,
+    /// Present when the model uses the velocity gradient (`Model::FIELDS`).
+    pub velocity_gradient: Option<Mat3ViewMut<'a, R>>,
     pub acceleration: Vec3ViewMut<'a, R>,
 }
 
@@ -64,6 +68,7 @@ impl<'a, R: Real, T: Topology> ParticleState<'a, R, T> {
 pub trait Passes<R: Real> {
     fn stress<Rh: Rheology<R>, T: Topology>(&mut self, args: StressArgs<'_, R, Rh, T>);
     fn shear_viscosity<Rh: Rheology<R>, T: Topology>(&mut self, args: ShearViscosityArgs<'_, R, Rh, T>);
+    fn velocity_gradient<Rh: Rheology<R>, T: Topology>(&mut self, args: VelocityGradientArgs<'_, R, Rh, T>);
     fn acceleration<Op: ViscousOperator<R>, T: Topology>(&mut self, args: AccelerationArgs<'_, R, Op, T>);
 }
 
@@ -78,6 +83,9 @@ impl<R: Real> Passes<R> for CpuPasses {
     }
     fn shear_viscosity<Rh: Rheology<R>, T: Topology>(&mut self, args: ShearViscosityArgs<'_, R, Rh, T>) {
         launch(self.n, |i| shear_viscosity_pass(i, &args));
+    }
+    fn velocity_gradient<Rh: Rheology<R>, T: Topology>(&mut self, args: VelocityGradientArgs<'_, R, Rh, T>) {
+        launch(self.n, |i| velocity_gradient_pass(i, &args));
     }
     fn acceleration<Op: ViscousOperator<R>, T: Topology>(&mut self, args: AccelerationArgs<'_, R, Op, T>) {
         launch(self.n, |i| acceleration_pass(i, &args));
@@ -94,7 +102,14 @@ pub trait WithModel {
 pub fn with_model<R: Real, W: WithModel>(scene: &Scene, work: W) -> W::Output {
     let v = &scene.material.viscosity;
     let nu0 = R::from_f64(v.nu0_m2_s);
+    let hourglass = R::from_f64(v.hourglass_control);
     match (v.operator, v.is_newtonian()) {
+        (ViscosityOperator::Stress, true) if v.hourglass_control > 0.0 => {
+            work.with::<R, _>(HourglassStressModel { rheology: Newtonian { nu0 }, coefficient: hourglass })
+        }
+        (ViscosityOperator::Stress, false) if v.hourglass_control > 0.0 => {
+            work.with::<R, _>(HourglassStressModel { rheology: cross_law(v), coefficient: hourglass })
+        }
         (ViscosityOperator::Laplacian, _) => work.with::<R, _>(LaplacianModel(Newtonian { nu0 })),
         (ViscosityOperator::Morris, true) => work.with::<R, _>(MorrisModel(Newtonian { nu0 })),
         (ViscosityOperator::Morris, false) => work.with::<R, _>(ShearThinningMorrisModel(cross_law(v))),
@@ -125,6 +140,14 @@ pub fn cross_law<R: Real>(v: &Viscosity) -> Cross<R> {
 #[derive(Clone, Copy, Debug)]
 pub struct StressModel<Rh>(pub Rh);
 
+/// The paper's operator with hourglass control (`coil_kernels::hourglass_control`) of weight
+/// `coefficient`, with rheology `Rh`.
+#[derive(Clone, Copy, Debug)]
+pub struct HourglassStressModel<Rh, R> {
+    pub rheology: Rh,
+    pub coefficient: R,
+}
+
 /// Müller et al. 2003's Laplacian operator (Newtonian, nu0).
 #[derive(Clone, Copy, Debug)]
 pub struct LaplacianModel<R>(pub Newtonian<R>);
@@ -139,7 +162,7 @@ pub struct MorrisModel<R>(pub Newtonian<R>);
 pub struct ShearThinningMorrisModel<Rh>(pub Rh);
 
 impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for StressModel<Rh> {
-    const FIELDS: ModelFields = ModelFields { stress: true, viscosity: false };
+    const FIELDS: ModelFields = ModelFields { stress: true, viscosity: false, velocity_gradient: false };
     fn viscosity(&self, shear_rate: R) -> R {
         self.0.viscosity(shear_rate)
     }
@@ -160,8 +183,37 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for StressModel<Rh> {
     }
 }
 
+impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for HourglassStressModel<Rh, R> {
+    const FIELDS: ModelFields = ModelFields { stress: false, viscosity: true, velocity_gradient: true };
+    fn viscosity(&self, shear_rate: R) -> R {
+        self.rheology.viscosity(shear_rate)
+    }
+    fn max_viscosity(&self) -> R {
+        self.rheology.max_viscosity()
+    }
+    fn accelerations<B: Passes<R>, T: Topology>(&self, backend: &mut B, s: ParticleState<'_, R, T>) {
+        let gradient = s.velocity_gradient.expect("hourglass control allocates the velocity gradient");
+        let viscosity = s.viscosity.expect("hourglass control allocates viscosity");
+        backend.velocity_gradient(VelocityGradientArgs {
+            neighborhood: s.neighborhood,
+            fluid: s.fluid,
+            rheology: self.rheology,
+            velocity: s.velocity,
+            density: s.density,
+            gradient,
+            viscosity,
+        });
+        backend.acceleration(s.acceleration_args(HourglassControlledStress {
+            coefficient: self.coefficient,
+            velocity: s.velocity,
+            gradient: gradient.read(),
+            viscosity: viscosity.read(),
+        }));
+    }
+}
+
 impl<R: Real> Model<R> for LaplacianModel<R> {
-    const FIELDS: ModelFields = ModelFields { stress: false, viscosity: false };
+    const FIELDS: ModelFields = ModelFields { stress: false, viscosity: false, velocity_gradient: false };
     fn viscosity(&self, shear_rate: R) -> R {
         self.0.viscosity(shear_rate)
     }
@@ -174,7 +226,7 @@ impl<R: Real> Model<R> for LaplacianModel<R> {
 }
 
 impl<R: Real> Model<R> for MorrisModel<R> {
-    const FIELDS: ModelFields = ModelFields { stress: false, viscosity: false };
+    const FIELDS: ModelFields = ModelFields { stress: false, viscosity: false, velocity_gradient: false };
     fn viscosity(&self, shear_rate: R) -> R {
         self.0.viscosity(shear_rate)
     }
@@ -187,7 +239,7 @@ impl<R: Real> Model<R> for MorrisModel<R> {
 }
 
 impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for ShearThinningMorrisModel<Rh> {
-    const FIELDS: ModelFields = ModelFields { stress: false, viscosity: true };
+    const FIELDS: ModelFields = ModelFields { stress: false, viscosity: true, velocity_gradient: false };
     fn viscosity(&self, shear_rate: R) -> R {
         self.0.viscosity(shear_rate)
     }

@@ -1,6 +1,6 @@
 //! Structure-of-arrays particle storage, allocated once to the run's capacity.
 
-use coil_kernels::view::{SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
+use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::Real;
 
 /// The per-particle arrays a physics variant needs beyond the particles' state.
@@ -8,8 +8,11 @@ use coil_kernels::Real;
 pub struct ModelFields {
     /// Shear stress tau, six components (the paper's operator).
     pub stress: bool,
-    /// Kinematic viscosity nu(D) (Morris's operator with a Cross fluid).
+    /// Kinematic viscosity nu(D) (Morris's operator with a Cross fluid; the paper's operator
+    /// with hourglass control).
     pub viscosity: bool,
+    /// Velocity gradient, nine components (the paper's operator with hourglass control).
+    pub velocity_gradient: bool,
 }
 
 /// Every per-particle array of a run. Arrays hold `capacity` entries; the first `len` are live.
@@ -32,8 +35,12 @@ pub struct Particles<R> {
     pub acceleration: [Vec<R>; 3],
     /// Shear stress tau (Pa): xx, yy, zz, xy, xz, yz. Allocated only for the paper's operator.
     pub stress: Option<[Vec<R>; 6]>,
-    /// Kinematic viscosity nu(D) (m^2/s). Allocated only for Morris's operator with a Cross fluid.
+    /// Kinematic viscosity nu(D) (m^2/s). Allocated only for Morris's operator with a Cross
+    /// fluid and for the paper's operator with hourglass control.
     pub viscosity: Option<Vec<R>>,
+    /// Velocity gradient grad v (1/s) by rows, `[a][b]` = d v_a / d x_b. Allocated only for the
+    /// paper's operator with hourglass control.
+    pub velocity_gradient: Option<[[Vec<R>; 3]; 3]>,
     /// Targets of the reorder, swapped with the field they receive.
     pub(crate) scratch_f64: Vec<f64>,
     pub(crate) scratch_real: Vec<R>,
@@ -57,6 +64,9 @@ impl<R: Real> Particles<R> {
             acceleration: [zeros(capacity), zeros(capacity), zeros(capacity)],
             stress: fields.stress.then(|| core::array::from_fn(|_| zeros(capacity))),
             viscosity: fields.viscosity.then(|| zeros(capacity)),
+            velocity_gradient: fields
+                .velocity_gradient
+                .then(|| core::array::from_fn(|_| core::array::from_fn(|_| zeros(capacity)))),
             scratch_f64: zeros(capacity),
             scratch_real: zeros(capacity),
             scratch_u32: zeros(capacity),
@@ -102,8 +112,9 @@ impl<R: Real> Particles<R> {
         let velocities_and_acceleration = 3 * 3 * r;
         let stress = if self.stress.is_some() { 6 * r } else { 0 };
         let viscosity = if self.viscosity.is_some() { r } else { 0 };
+        let gradient = if self.velocity_gradient.is_some() { 9 * r } else { 0 };
         let scratch = 8 + r + 4;
-        position + velocities_and_acceleration + 4 + r + stress + viscosity + scratch
+        position + velocities_and_acceleration + 4 + r + stress + viscosity + gradient + scratch
     }
 
     pub fn position_view(&self) -> Vec3View<'_, f64> {
@@ -146,4 +157,9 @@ pub fn stress_view_mut<R: Copy>(s: &mut [Vec<R>; 6], n: usize) -> SymTensorViewM
         xz: view_mut(xz, n),
         yz: view_mut(yz, n),
     }
+}
+
+pub fn mat3_view_mut<R: Copy>(m: &mut [[Vec<R>; 3]; 3], n: usize) -> Mat3ViewMut<'_, R> {
+    let [x, y, z] = m;
+    Mat3ViewMut { rows: [vec3_view_mut(x, n), vec3_view_mut(y, n), vec3_view_mut(z, n)] }
 }

@@ -161,6 +161,11 @@ pub enum ViscosityOperator {
     Morris,
 }
 
+/// Largest `hourglass_control` a scene may ask for: the weights `coil tradeoff` measured
+/// stable at the Eq. (10) bound (0.5, 1, 2); the control adds to the viscous term, which that
+/// bound does not count.
+pub const MAX_HOURGLASS_CONTROL: f64 = 2.0;
+
 /// Kinematic viscosities (m^2/s) and the Cross model, Eq. (3).
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -177,6 +182,12 @@ pub struct Viscosity {
     /// Cross rate index n (dimensionless).
     #[serde(default = "one")]
     pub cross_n: f64,
+    /// Weight of the hourglass control added to the paper's operator (dimensionless, 0 to 2):
+    /// Morris's Laplacian of the part of each pair's velocity difference that the velocity
+    /// gradients of Eq. (8) do not explain, which damps the odd-even mode Eq. (8) then (9)
+    /// cannot see. 0 (the default) is the paper's operator alone.
+    #[serde(default)]
+    pub hourglass_control: f64,
 }
 
 fn one() -> f64 {
@@ -534,6 +545,19 @@ impl Scene {
             return err(
                 "material.viscosity.operator",
                 "the Laplacian operator is Newtonian (nu0 only); set cross_k_s = 0, or use operator = \"morris\" or \"stress\" for a Cross fluid".into(),
+            );
+        }
+        if !(0.0..=MAX_HOURGLASS_CONTROL).contains(&v.hourglass_control) {
+            return err(
+                "material.viscosity.hourglass_control",
+                format!("must be from 0 to {MAX_HOURGLASS_CONTROL}, got {}", v.hourglass_control),
+            );
+        }
+        if v.hourglass_control > 0.0 && v.operator != ViscosityOperator::Stress {
+            return err(
+                "material.viscosity.hourglass_control",
+                "controls the paper's operator (operator = \"stress\"); the Laplacian operators have no odd-even mode to control"
+                    .into(),
             );
         }
 

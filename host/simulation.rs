@@ -5,7 +5,7 @@ use crate::inlet::Inlet;
 use crate::model::{CpuPasses, Model, ParticleState};
 use crate::neighbor_grid::NeighborGrid;
 use crate::parallel::launch;
-use crate::particles::{stress_view_mut, vec3_view, vec3_view_mut, view_mut, Particles};
+use crate::particles::{mat3_view_mut, stress_view_mut, vec3_view, vec3_view_mut, view_mut, Particles};
 use crate::scene::{DensityKernel, Scene, Walls};
 use crate::setup::{calibrated_kernels, calibrated_mass, InitialParticles};
 use crate::time_step::{Limit, StabilityBound, TimeStepper};
@@ -282,6 +282,7 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             density: View::new(&p.density[..n]),
             stress: p.stress.as_mut().map(|s| stress_view_mut(s, n)),
             viscosity: p.viscosity.as_mut().map(|v| view_mut(v, n)),
+            velocity_gradient: p.velocity_gradient.as_mut().map(|g| mat3_view_mut(g, n)),
             acceleration: vec3_view_mut(&mut p.acceleration, n),
         };
         self.model.accelerations(&mut CpuPasses { n }, state);

@@ -6,7 +6,10 @@ mod common;
 use coil::scene::{PressureGradient, ViscosityOperator, Walls};
 use coil::validation::hydrostatic::{self, Tank};
 use coil::validation::poiseuille::{cross_steady_velocity, relative_max_error, simulate, startup_velocity, Channel, CrossLaw};
-use coil::validation::{cross_poiseuille, startup_poiseuille, taylor_green, torus_ordering, MORRIS_TIMES};
+use coil::validation::{
+    cross_poiseuille, cross_poiseuille_in, startup_poiseuille, startup_poiseuille_in, taylor_green, torus_ordering,
+    HOURGLASS_CONTROL, MORRIS_TIMES,
+};
 
 #[test]
 fn the_startup_series_starts_at_rest_and_ends_at_the_parabola() {
@@ -66,6 +69,20 @@ fn steady_cross_poiseuille_meets_the_tolerance_with_morris() {
     assert!(paper.error > 0.1, "the staircase is gone? {}", paper.error);
 }
 
+/// Hourglass control gives the paper's operator what its odd-even mode took: at 10 across
+/// the start-up case meets 3 % (measured 0.0102, against 0.144 without) and so does the
+/// shear-thinning channel that shows the staircase (0.0246 against 0.229).
+#[test]
+fn hourglass_control_brings_the_papers_operator_within_the_tolerance_at_10_across() {
+    let controlled = Channel { hourglass_control: HOURGLASS_CONTROL, ..Channel::morris(10, ViscosityOperator::Stress) };
+    let startup = startup_poiseuille_in(&controlled, None).expect("stable");
+    let law = CrossLaw { nu_inf_m2_s: 0.25e-6, k_s: 10.0, n: 0.5 };
+    let cross = cross_poiseuille_in(&Channel { cross: Some(law), ..controlled }, None).expect("stable");
+    eprintln!("paper's operator with hourglass control, 10 across: start-up {:.4}, Cross {:.4}", startup.error, cross.error);
+    assert!(startup.passed(), "start-up: {} above {}", startup.error, startup.tolerance);
+    assert!(cross.passed(), "Cross K = 10 s, n = 0.5: {} above {}", cross.error, cross.tolerance);
+}
+
 /// With the paper's walls (at rest) the channel flows as if one spacing wider: the error at 10
 /// across is then some 20 times the mirrored walls' (measured: 0.23 against 0.011).
 #[test]
@@ -105,10 +122,10 @@ fn the_hydrostatic_tank_holds_rho0_g_depth_and_eq7_doubles_it() {
 /// order).
 #[test]
 fn the_taylor_green_vortex_decays_at_the_exact_rate() {
-    let laplacian = taylor_green(20, ViscosityOperator::Laplacian, None).expect("stable");
+    let laplacian = taylor_green(20, ViscosityOperator::Laplacian, 0.0, None).expect("stable");
     assert!(laplacian.passed(), "Laplacian: {}", laplacian.error);
-    let coarse = taylor_green(20, ViscosityOperator::Stress, None).expect("stable");
-    let fine = taylor_green(40, ViscosityOperator::Stress, None).expect("stable");
+    let coarse = taylor_green(20, ViscosityOperator::Stress, 0.0, None).expect("stable");
+    let fine = taylor_green(40, ViscosityOperator::Stress, 0.0, None).expect("stable");
     eprintln!("paper's operator: {:.4} at 20 across, {:.4} at 40", coarse.error, fine.error);
     assert!(fine.passed() && fine.error < 0.5 * coarse.error, "{} then {}", coarse.error, fine.error);
 }

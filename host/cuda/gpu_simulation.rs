@@ -19,13 +19,14 @@ use coil_kernels::cell_grid::{HashArgs, Neighborhood};
 use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::density::{DensityArgs, DensityKernel as _, Poly6, Spiky};
 use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
+use coil_kernels::hourglass_control::VelocityGradientArgs;
 use coil_kernels::leapfrog::LeapfrogArgs;
 use coil_kernels::mirrored_wall::MirroredWallArgs;
 use coil_kernels::nozzle::NozzleArgs;
 use coil_kernels::shear_viscosity::ShearViscosityArgs;
 use coil_kernels::topology::{Open, Topology};
 use coil_kernels::velocity_gradient::StressArgs;
-use coil_kernels::view::{SymTensorViewMut, View};
+use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, View};
 use coil_kernels::Real;
 use std::fmt;
 
@@ -68,6 +69,7 @@ struct DeviceState<R> {
     id: DeviceArray<u32>,
     stress: Option<[DeviceArray<R>; 6]>,
     viscosity: Option<DeviceArray<R>>,
+    velocity_gradient: Option<[DeviceVec3<R>; 3]>,
     scratch_f64: DeviceArray<f64>,
     scratch_real: DeviceArray<R>,
     scratch_u32: DeviceArray<u32>,
@@ -111,6 +113,15 @@ impl<R: Real> DeviceState<R> {
             id: DeviceArray::zeros(gpu, capacity, "ids")?,
             stress,
             viscosity: if fields.viscosity { Some(DeviceArray::zeros(gpu, capacity, "viscosities")?) } else { None },
+            velocity_gradient: if fields.velocity_gradient {
+                Some([
+                    vec3_zeros(gpu, capacity, "velocity gradients")?,
+                    vec3_zeros(gpu, capacity, "velocity gradients")?,
+                    vec3_zeros(gpu, capacity, "velocity gradients")?,
+                ])
+            } else {
+                None
+            },
             scratch_f64: DeviceArray::zeros(gpu, capacity, "sort scratch")?,
             scratch_real: DeviceArray::zeros(gpu, capacity, "sort scratch")?,
             scratch_u32: DeviceArray::zeros(gpu, capacity, "sort scratch")?,
@@ -139,6 +150,7 @@ impl<R: Real> DeviceState<R> {
             + self.id.bytes()
             + self.stress.as_ref().map_or(0, |s| s.iter().map(DeviceArray::bytes).sum())
             + self.viscosity.as_ref().map_or(0, DeviceArray::bytes)
+            + self.velocity_gradient.as_ref().map_or(0, |g| g.iter().map(r3).sum())
             + self.scratch_f64.bytes()
             + self.scratch_real.bytes()
             + self.scratch_u32.bytes()
@@ -204,6 +216,9 @@ impl<R: Real> Passes<R> for GpuPasses<'_> {
     }
     fn shear_viscosity<Rh: Rheology<R>, T: Topology>(&mut self, args: ShearViscosityArgs<'_, R, Rh, T>) {
         self.run(kernel::<R>("shear_viscosity", Rh::NAME, T::NAME), args);
+    }
+    fn velocity_gradient<Rh: Rheology<R>, T: Topology>(&mut self, args: VelocityGradientArgs<'_, R, Rh, T>) {
+        self.run(kernel::<R>("velocity_gradient", Rh::NAME, T::NAME), args);
     }
     fn acceleration<Op: ViscousOperator<R>, T: Topology>(&mut self, args: AccelerationArgs<'_, R, Op, T>) {
         self.run(kernel::<R>("acceleration", Op::NAME, T::NAME), args);
@@ -339,6 +354,10 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
             density: d.density.view(n),
             stress: d.stress_view(n),
             viscosity: d.viscosity.as_ref().map(|v| v.view_mut(n)),
+            velocity_gradient: d
+                .velocity_gradient
+                .as_ref()
+                .map(|g| Mat3ViewMut { rows: [vec3_view_mut(&g[0], n), vec3_view_mut(&g[1], n), vec3_view_mut(&g[2], n)] }),
             acceleration: vec3_view_mut(&d.acceleration, n),
         };
         let mut passes = GpuPasses { gpu: &mut self.gpu, count: d.count.view(1), threads: n as u32, result: Ok(()) };

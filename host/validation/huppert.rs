@@ -24,6 +24,8 @@ pub struct Release {
     /// nu (m^2/s).
     pub nu_m2_s: f64,
     pub operator: ViscosityOperator,
+    /// Weight of the hourglass control of the paper's operator (0: none).
+    pub hourglass_control: f64,
     /// c (m/s).
     pub sound_speed_m_s: f64,
     /// The current is followed until Huppert's radius reaches this many R0.
@@ -39,6 +41,7 @@ impl Release {
             // Re = U H / nu is about 0.06 once the radius has grown 1.5 times (`reynolds_at`).
             nu_m2_s: 0.05,
             operator,
+            hourglass_control: 0.0,
             // g H0 / c^2 = 1 %, and the flow stays below Mach 0.05.
             sound_speed_m_s: 10.0,
             final_spread: 2.0,
@@ -88,6 +91,7 @@ gravity_m_s2 = [0.0, {g:e}, 0.0]
 [material.viscosity]
 operator = "{operator}"
 nu0_m2_s = {nu:e}
+hourglass_control = {hg:e}
 [domain]
 min_m = [{lo:e}, {floor:e}, {lo:e}]
 max_m = [{reach:e}, {top:e}, {reach:e}]
@@ -107,6 +111,7 @@ height_m = {h:e}
             g = -GRAVITY,
             operator = scene_word(self.operator),
             nu = self.nu_m2_s,
+            hg = self.hourglass_control,
             lo = -reach,
             floor = -4.0 * s,
             top = 2.0 * h,

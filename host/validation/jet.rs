@@ -32,8 +32,14 @@ pub fn axis_offset(snapshot: &Snapshot, plate_y: f64, diameter: f64) -> Option<f
 }
 
 /// The jet's diameter D (m) and its scene with the nozzle `height_over_d` diameters above the
-/// plate, operator `op`, run to `end_time_s`.
-pub fn jet_scene(height_over_d: f64, op: ViscosityOperator, end_time_s: f64) -> Result<(f64, Scene), String> {
+/// plate, operator `op` with hourglass control of weight `hourglass_control`, run to
+/// `end_time_s`.
+pub fn jet_scene(
+    height_over_d: f64,
+    op: ViscosityOperator,
+    hourglass_control: f64,
+    end_time_s: f64,
+) -> Result<(f64, Scene), String> {
     let mut scene = Scene::parse(NEWTONIAN_JET, "scenes/newtonian_jet.toml").map_err(|e| e.to_string())?;
     let inlet = scene.inlets.first_mut().ok_or("the jet scene has no inlet")?;
     let crate::scene::Nozzle::Circle { radius_m } = inlet.nozzle else {
@@ -44,6 +50,7 @@ pub fn jet_scene(height_over_d: f64, op: ViscosityOperator, end_time_s: f64) -> 
     inlet.position_m[1] = height;
     scene.domain.max_m[1] = height + 0.03;
     scene.material.viscosity.operator = op;
+    scene.material.viscosity.hourglass_control = hourglass_control;
     scene.simulation.end_time_s = end_time_s;
     scene.name = format!("jet, H/D = {height_over_d}");
     Ok((diameter, scene))
@@ -51,8 +58,13 @@ pub fn jet_scene(height_over_d: f64, op: ViscosityOperator, end_time_s: f64) -> 
 
 /// The sideways offset of the axis over `diameter` (dimensionless) against time (s), sampled
 /// every 0.02 s until `end_time_s` from the first sample with fluid falling through the slab.
-pub fn axis_offsets(height_over_d: f64, op: ViscosityOperator, end_time_s: f64) -> Result<Vec<[f64; 2]>, String> {
-    let (diameter, scene) = jet_scene(height_over_d, op, end_time_s)?;
+pub fn axis_offsets(
+    height_over_d: f64,
+    op: ViscosityOperator,
+    hourglass_control: f64,
+    end_time_s: f64,
+) -> Result<Vec<[f64; 2]>, String> {
+    let (diameter, scene) = jet_scene(height_over_d, op, hourglass_control, end_time_s)?;
     let samples = (end_time_s / SAMPLE_EVERY_S).round() as usize;
     let times: Vec<f64> = (1..=samples).map(|k| k as f64 * SAMPLE_EVERY_S).collect();
     let snaps = snapshots(&scene, &times, None)?;

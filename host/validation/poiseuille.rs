@@ -30,6 +30,8 @@ pub struct Channel {
     pub safety_factor: f64,
     /// W of Eq. (5).
     pub density_kernel: DensityKernel,
+    /// Weight of the hourglass control of the paper's operator (0: none).
+    pub hourglass_control: f64,
 }
 
 /// The Cross model, Eq. (3), by its constants.
@@ -63,6 +65,7 @@ impl Channel {
             sound_speed_m_s: 2.5e-3,
             safety_factor: 1.0,
             density_kernel: DensityKernel::Poly6,
+            hourglass_control: 0.0,
         }
     }
 
@@ -100,6 +103,7 @@ density_kernel = "{density_kernel}"
 [material.viscosity]
 operator = "{operator}"
 nu0_m2_s = {nu0:e}
+hourglass_control = {hg:e}
 {cross}
 [domain]
 min_m = [0.0, {ylo:e}, 0.0]
@@ -124,6 +128,7 @@ max_m = [{w:e}, {l:e}, {w:e}]
             ylo = -4.0 * s,
             yhi = l + 4.0 * s,
             sf = self.safety_factor,
+            hg = self.hourglass_control,
         );
         Scene::parse(&text, "poiseuille (generated)").expect("the generated channel is a valid scene")
     }

@@ -19,11 +19,13 @@ pub struct Vortex {
     pub nu_m2_s: f64,
     pub across: usize,
     pub operator: ViscosityOperator,
+    /// Weight of the hourglass control of the paper's operator (0: none).
+    pub hourglass_control: f64,
 }
 
 impl Vortex {
     pub fn new(across: usize, operator: ViscosityOperator) -> Self {
-        Self { period_m: 1e-3, speed_m_s: 1e-3, nu_m2_s: 1e-6, across, operator }
+        Self { period_m: 1e-3, speed_m_s: 1e-3, nu_m2_s: 1e-6, across, operator, hourglass_control: 0.0 }
     }
 
     /// The exact decay rate of the velocity amplitude, 8 pi^2 nu / L^2 (1/s).
@@ -57,6 +59,7 @@ gravity_m_s2 = [0.0, 0.0, 0.0]
 [material.viscosity]
 operator = "{operator}"
 nu0_m2_s = {nu:e}
+hourglass_control = {hg:e}
 [domain]
 min_m = [0.0, 0.0, 0.0]
 max_m = [{l:e}, {l:e}, {w:e}]
@@ -70,6 +73,7 @@ max_m = [{l:e}, {l:e}, {w:e}]
 "#,
             c = self.sound_speed(),
             nu = self.nu_m2_s,
+            hg = self.hourglass_control,
         );
         Scene::parse(&text, "taylor-green (generated)").expect("the generated vortex is a valid scene")
     }

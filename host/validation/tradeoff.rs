@@ -4,7 +4,7 @@
 //! Pareto front.
 
 use super::poiseuille::{Channel, CrossLaw};
-use super::{cross_poiseuille_in, startup_poiseuille_in};
+use super::{cross_poiseuille_in, startup_poiseuille_in, HOURGLASS_CONTROL};
 use crate::plot::{Axis, Chart, Line, Series, PALETTE};
 use crate::scene::{DensityKernel, Precision, ViscosityOperator, Walls};
 
@@ -54,6 +54,12 @@ pub fn trials(quick: bool) -> Vec<Trial> {
             add("start-up", knob, format!("{across} across, {} operator", operator_word(op)), Channel::morris(across, op));
         }
     }
+    let controlled =
+        |across| Channel { hourglass_control: HOURGLASS_CONTROL, ..Channel::morris(across, ViscosityOperator::Stress) };
+    for &across in resolutions {
+        let setting = format!("{across} across, paper's operator, hourglass control {HOURGLASS_CONTROL}");
+        add("start-up", "hourglass control", setting, controlled(across));
+    }
     let safety: &[f64] = if quick { &[0.5] } else { &[0.5, 0.25] };
     for &f in safety {
         add("start-up", "dt safety factor", format!("{f} x the Eq. (10) bound"), Channel { safety_factor: f, ..base });
@@ -86,6 +92,8 @@ pub fn trials(quick: bool) -> Vec<Trial> {
         for across in [10, 20] {
             let morris = Channel { operator: ViscosityOperator::Morris, ..cross(across) };
             add("Cross", "operator", format!("{across} across, Morris's operator"), morris);
+            let setting = format!("{across} across, hourglass control {HOURGLASS_CONTROL}");
+            add("Cross", "hourglass control", setting, Channel { hourglass_control: HOURGLASS_CONTROL, ..cross(across) });
         }
         add("Cross", "precision", "f32".into(), Channel { precision: Precision::F32, ..cross(10) });
         let c = 0.1 * cross(10).sound_speed_m_s;

@@ -19,8 +19,19 @@ pub trait ViscousOperator<R: Real>: Copy + Send + Sync {
     type Own: Copy;
     fn own(&self, i: usize, density_i: R) -> Self::Own;
     /// Particle j's contribution to particle i's viscous acceleration divided by m_j
-    /// (m/s^2 per kg).
-    fn pair(&self, own: &Self::Own, j: usize, density_j: R, r2: R, grad_w: Vec3<R>, kernels: &SmoothingKernels<R>) -> Vec3<R>;
+    /// (m/s^2 per kg), for `r_ij = x_i - x_j` (m), `r2` its square and `grad_w` the spiky
+    /// gradient there.
+    #[allow(clippy::too_many_arguments)]
+    fn pair(
+        &self,
+        own: &Self::Own,
+        j: usize,
+        density_j: R,
+        r_ij: Vec3<R>,
+        r2: R,
+        grad_w: Vec3<R>,
+        kernels: &SmoothingKernels<R>,
+    ) -> Vec3<R>;
 }
 
 /// The paper's operator, Eq. (9): sum_j m_j (tau_i / rho_i^2 + tau_j / rho_j^2) · grad_i W,
@@ -48,7 +59,16 @@ impl<R: Real> ViscousOperator<R> for StressDivergence<'_, R> {
         self.stress_over_density2(i, density_i)
     }
     #[inline(always)]
-    fn pair(&self, own: &SymTensor<R>, j: usize, density_j: R, _r2: R, grad_w: Vec3<R>, _: &SmoothingKernels<R>) -> Vec3<R> {
+    fn pair(
+        &self,
+        own: &SymTensor<R>,
+        j: usize,
+        density_j: R,
+        _r_ij: Vec3<R>,
+        _r2: R,
+        grad_w: Vec3<R>,
+        _: &SmoothingKernels<R>,
+    ) -> Vec3<R> {
         own.add(self.stress_over_density2(j, density_j)).dot(grad_w)
     }
 }
@@ -74,7 +94,16 @@ impl<R: Real> ViscousOperator<R> for VelocityLaplacian<'_, R> {
         Vec3::new(x, y, z)
     }
     #[inline(always)]
-    fn pair(&self, own: &Vec3<R>, j: usize, density_j: R, r2: R, _grad_w: Vec3<R>, kernels: &SmoothingKernels<R>) -> Vec3<R> {
+    fn pair(
+        &self,
+        own: &Vec3<R>,
+        j: usize,
+        density_j: R,
+        _r_ij: Vec3<R>,
+        r2: R,
+        _grad_w: Vec3<R>,
+        kernels: &SmoothingKernels<R>,
+    ) -> Vec3<R> {
         let [x, y, z] = self.velocity.at(j);
         (Vec3::new(x, y, z) - *own) * (self.nu0 * kernels.viscosity_laplacian(r2) / density_j)
     }
@@ -135,6 +164,7 @@ impl<R: Real, Nu: ParticleViscosity<R>> ViscousOperator<R> for MorrisViscosity<'
         own: &(Vec3<R>, R),
         j: usize,
         density_j: R,
+        _r_ij: Vec3<R>,
         r2: R,
         _grad_w: Vec3<R>,
         kernels: &SmoothingKernels<R>,
@@ -166,7 +196,7 @@ pub fn acceleration<R: Real, Op: ViscousOperator<R>, T: Topology>(
         let rho_j = density.at(j);
         let grad_w = fluid.kernels.spiky_gradient(r_ij, r2);
         pressure_sum += grad_w * ((p_i + pressure(rho_j, fluid)) / rho_j);
-        viscous_sum += viscous.pair(&own, j, rho_j, r2, grad_w, &fluid.kernels);
+        viscous_sum += viscous.pair(&own, j, rho_j, r_ij, r2, grad_w, &fluid.kernels);
     });
     pressure_sum * (-fluid.pressure_pair_weight * fluid.mass / rho_i) + viscous_sum * fluid.mass + fluid.gravity
 }

@@ -8,8 +8,11 @@
 //! particle field, [`density::density_pass`] (Eq. 5, 6), [`mirrored_wall::mirrored_wall_pass`]
 //! (when the scene asks), [`velocity_gradient::stress_pass`]
 //! (Eq. 8, 2, 3; the paper's operator only) or [`shear_viscosity::shear_viscosity_pass`]
-//! (Eq. 8, 2, 3; Morris's operator with the Cross model only),
-//! [`acceleration::acceleration_pass`] (Eq. 7, 9, Müller's or Morris's Laplacian, gravity),
+//! (Eq. 8, 2, 3; Morris's operator with the Cross model only) or
+//! [`hourglass_control::velocity_gradient_pass`] (Eq. 8, 2, 3; the paper's operator with
+//! hourglass control),
+//! [`acceleration::acceleration_pass`] (Eq. 7, 9, Müller's or Morris's Laplacian, hourglass
+//! control, gravity),
 //! [`nozzle::nozzle_pass`] (jet scenes only) and
 //! [`leapfrog::leapfrog_pass`]; then [`diagnostics`] guards the run.
 #![no_std]
@@ -27,6 +30,7 @@ pub mod cross_viscosity;
 pub mod density;
 pub mod diagnostics;
 pub mod fluid;
+pub mod hourglass_control;
 pub mod leapfrog;
 pub mod mirrored_wall;
 pub mod nozzle;

@@ -12,6 +12,7 @@ use crate::counting_sort::{chunk_total, count_particle, gather, scan_chunk, scan
 use crate::cross_viscosity::{Cross, Newtonian};
 use crate::density::{density_pass, DensityArgs, Poly6, Spiky};
 use crate::diagnostics::{diagnostics_pass, DiagnosticsArgs, StateFigures};
+use crate::hourglass_control::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
 use crate::leapfrog::{leapfrog_pass, LeapfrogArgs};
 use crate::mirrored_wall::{mirrored_wall_pass, MirroredWallArgs};
 use crate::nozzle::{nozzle_pass, NozzleArgs};
@@ -135,6 +136,42 @@ per_topology_kernels!(
     acceleration_morris_shear_periodic_f64,
     AccelerationArgs<f64, MorrisViscosity<'static, f64, View<'static, f64>>>,
     acceleration_pass<f64, MorrisViscosity<'static, f64, View<'static, f64>>>
+);
+per_topology_kernels!(
+    velocity_gradient_newtonian_f32,
+    velocity_gradient_newtonian_periodic_f32,
+    VelocityGradientArgs<f32, Newtonian<f32>>,
+    velocity_gradient_pass<f32, Newtonian<f32>>
+);
+per_topology_kernels!(
+    velocity_gradient_newtonian_f64,
+    velocity_gradient_newtonian_periodic_f64,
+    VelocityGradientArgs<f64, Newtonian<f64>>,
+    velocity_gradient_pass<f64, Newtonian<f64>>
+);
+per_topology_kernels!(
+    velocity_gradient_cross_f32,
+    velocity_gradient_cross_periodic_f32,
+    VelocityGradientArgs<f32, Cross<f32>>,
+    velocity_gradient_pass<f32, Cross<f32>>
+);
+per_topology_kernels!(
+    velocity_gradient_cross_f64,
+    velocity_gradient_cross_periodic_f64,
+    VelocityGradientArgs<f64, Cross<f64>>,
+    velocity_gradient_pass<f64, Cross<f64>>
+);
+per_topology_kernels!(
+    acceleration_hourglass_f32,
+    acceleration_hourglass_periodic_f32,
+    AccelerationArgs<f32, HourglassControlledStress<'static, f32>>,
+    acceleration_pass<f32, HourglassControlledStress<'static, f32>>
+);
+per_topology_kernels!(
+    acceleration_hourglass_f64,
+    acceleration_hourglass_periodic_f64,
+    AccelerationArgs<f64, HourglassControlledStress<'static, f64>>,
+    acceleration_pass<f64, HourglassControlledStress<'static, f64>>
 );
 per_index_kernel!(nozzle_f32, NozzleArgs<'static, f32>, nozzle_pass::<f32>);
 per_index_kernel!(nozzle_f64, NozzleArgs<'static, f64>, nozzle_pass::<f64>);

@@ -109,6 +109,30 @@ impl<R: Real> Mat3<R> {
         self
     }
 
+    /// The product `M · v`.
+    #[inline(always)]
+    pub fn dot(self, v: Vec3<R>) -> Vec3<R> {
+        let m = self.m;
+        Vec3::new(
+            m[0][0] * v.x + m[0][1] * v.y + m[0][2] * v.z,
+            m[1][0] * v.x + m[1][1] * v.y + m[1][2] * v.z,
+            m[2][0] * v.x + m[2][1] * v.y + m[2][2] * v.z,
+        )
+    }
+
+    /// The sum `M + N`, written out like `add_outer`.
+    #[inline(always)]
+    pub fn add(self, o: Self) -> Self {
+        let (a, b) = (self.m, o.m);
+        Self {
+            m: [
+                [a[0][0] + b[0][0], a[0][1] + b[0][1], a[0][2] + b[0][2]],
+                [a[1][0] + b[1][0], a[1][1] + b[1][1], a[1][2] + b[1][2]],
+                [a[2][0] + b[2][0], a[2][1] + b[2][1], a[2][2] + b[2][2]],
+            ],
+        }
+    }
+
     /// The product `M^T · v`.
     #[inline(always)]
     pub fn transpose_dot(self, v: Vec3<R>) -> Vec3<R> {

@@ -187,6 +187,12 @@ impl<'a, T: Copy> Vec3ViewMut<'a, T> {
         self.y.write(i, v[1]);
         self.z.write(i, v[2]);
     }
+
+    /// The same arrays, read-only.
+    #[inline(always)]
+    pub fn read(&self) -> Vec3View<'a, T> {
+        Vec3View { x: self.x.read(), y: self.y.read(), z: self.z.read() }
+    }
 }
 
 /// Six arrays holding the independent components of a per-particle symmetric tensor.
@@ -240,5 +246,55 @@ impl<'a, T: Copy> SymTensorViewMut<'a, T> {
                 yz: View::from_raw(self.yz.ptr, self.yz.len),
             }
         }
+    }
+}
+
+/// Nine arrays holding a per-particle 3x3 matrix by rows, `rows[a]` its row a.
+#[repr(C)]
+#[derive(Debug)]
+pub struct Mat3View<'a, T> {
+    pub rows: [Vec3View<'a, T>; 3],
+}
+impl<T> Clone for Mat3View<'_, T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<T> Copy for Mat3View<'_, T> {}
+
+impl<T: Copy> Mat3View<'_, T> {
+    #[inline(always)]
+    pub fn at(&self, i: usize) -> [[T; 3]; 3] {
+        [self.rows[0].at(i), self.rows[1].at(i), self.rows[2].at(i)]
+    }
+}
+
+/// Mutable counterpart of [`Mat3View`].
+#[repr(C)]
+#[derive(Debug)]
+pub struct Mat3ViewMut<'a, T> {
+    pub rows: [Vec3ViewMut<'a, T>; 3],
+}
+impl<T> Clone for Mat3ViewMut<'_, T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<T> Copy for Mat3ViewMut<'_, T> {}
+
+impl<'a, T: Copy> Mat3ViewMut<'a, T> {
+    /// # Safety
+    /// As for [`ViewMut::write`].
+    #[inline(always)]
+    pub unsafe fn write(&self, i: usize, m: [[T; 3]; 3]) {
+        self.rows[0].write(i, m[0]);
+        self.rows[1].write(i, m[1]);
+        self.rows[2].write(i, m[2]);
+    }
+
+    /// The same arrays, read-only: what a later pass reads of what this one wrote.
+    #[inline(always)]
+    pub fn read(&self) -> Mat3View<'a, T> {
+        Mat3View { rows: self.rows.map(|r| r.read()) }
     }
 }
