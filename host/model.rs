@@ -1,8 +1,8 @@
 //! The physics variant of a run, chosen once from the scene: the paper's stress operator with a
 //! Newtonian or Cross rheology, without or with hourglass control, Müller's Laplacian
 //! (Newtonian), or Morris's operator with a constant viscosity or a shear-thinning one per
-//! particle. Each is a type, so the CPU loops and
-//! the GPU kernels of a run contain only the physics it uses.
+//! particle. Each is a type, so the CPU loops and the GPU kernels of a run contain only the
+//! physics it uses.
 
 use crate::parallel::launch;
 pub use crate::particles::ModelFields;
