@@ -268,12 +268,14 @@ pub enum Walls {
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct TimeStep {
-    /// Multiplies the automatic dt (0 < factor <= 1).
+    /// Multiplies the automatic dt (0 < factor <= 1; above 1 only with
+    /// `allow_above_stability_bound`).
     #[serde(default = "one")]
     pub safety_factor: f64,
     /// A fixed dt (s) instead of the automatic one.
     pub fixed_s: Option<f64>,
-    /// Accept a fixed dt above the Eq. (10) bound (the run may blow up; the guard stops it).
+    /// Accept a dt above the Eq. (10) bound, fixed or by a safety factor above 1 (how far each
+    /// operator stays stable is measured, not guaranteed; the guard stops a run that blows up).
     #[serde(default)]
     pub allow_above_stability_bound: bool,
 }
@@ -604,8 +606,16 @@ impl Scene {
         let s = &self.simulation;
         positive("simulation.end_time_s", s.end_time_s)?;
         let ts = &s.time_step;
-        if !(ts.safety_factor > 0.0 && ts.safety_factor <= 1.0) {
-            return err("simulation.time_step.safety_factor", format!("must be in (0, 1], got {}", ts.safety_factor));
+        positive("simulation.time_step.safety_factor", ts.safety_factor)?;
+        if ts.safety_factor > 1.0 && !ts.allow_above_stability_bound {
+            return err(
+                "simulation.time_step.safety_factor",
+                format!(
+                    "{} would put dt above the stability bound of Eq. (10); use at most 1, or set \
+                     simulation.time_step.allow_above_stability_bound = true to run anyway",
+                    ts.safety_factor
+                ),
+            );
         }
         if let Some(dt) = ts.fixed_s {
             positive("simulation.time_step.fixed_s", dt)?;
@@ -616,7 +626,7 @@ impl Scene {
                     "simulation.time_step.fixed_s",
                     format!(
                         "{dt:e} s is above the stability bound of Eq. (10), {limit_dt:.3e} s (set by the {limit}); \
-                         explicit leap-frog blows up above it. Lower it, remove it for the automatic step, or set \
+                         above it explicit leap-frog is not known to be stable. Lower it, remove it for the automatic step, or set \
                          simulation.time_step.allow_above_stability_bound = true to run anyway"
                     ),
                 );

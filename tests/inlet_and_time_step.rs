@@ -1,5 +1,5 @@
-//! Inlets deliver the mass flow rate they were given; dt follows Eq. (10) and refuses unsafe
-//! fixed steps.
+//! Inlets deliver the mass flow rate they were given; dt follows Eq. (10) and refuses a step
+//! above it, fixed or scaled, unless the scene overrides the bound.
 
 mod common;
 
@@ -164,4 +164,24 @@ fn fixed_dt_above_the_bound_is_refused_unless_overridden() {
     assert!(err.reason.contains("Eq. (10)") && err.reason.contains("2.000e-4"), "{}", err.reason);
     let allowed = above.replace("fixed_s = 3e-4", "fixed_s = 3e-4\nallow_above_stability_bound = true");
     assert!(coil::scene::Scene::parse(&allowed, "box.toml").is_ok());
+}
+
+#[test]
+fn a_safety_factor_above_one_is_refused_unless_overridden_and_then_scales_the_bound() {
+    let base = common::box_scene(0.02, [0.2; 3], [0.2; 3], "");
+    let above = base.replace("precision = \"f64\"", "precision = \"f64\"\n[simulation.time_step]\nsafety_factor = 4.0");
+    let err = coil::scene::Scene::parse(&above, "box.toml").expect_err("refused");
+    assert_eq!(err.field, "simulation.time_step.safety_factor");
+    assert!(err.reason.contains("Eq. (10)") && err.reason.contains("allow_above_stability_bound"), "{}", err.reason);
+    let negative = above.replace("safety_factor = 4.0", "safety_factor = -1.0");
+    assert_eq!(
+        coil::scene::Scene::parse(&negative, "box.toml").expect_err("refused").field,
+        "simulation.time_step.safety_factor"
+    );
+    let allowed = common::scene(&above.replace("safety_factor = 4.0", "safety_factor = 4.0\nallow_above_stability_bound = true"));
+    let initial = initial_particles(&allowed, "box.toml").expect("particles");
+    let sim = Simulation::<f64, _>::new(&allowed, &initial, StressModel(Newtonian { nu0: allowed.material.viscosity.nu0_m2_s }));
+    let (bound, _) = sim.stepper.bound.dt();
+    let (dt, _) = sim.next_dt();
+    assert!((dt - 4.0 * bound).abs() < 1e-12 * bound, "{dt} against 4 x {bound}");
 }

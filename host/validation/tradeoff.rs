@@ -4,9 +4,10 @@
 //! Pareto front.
 
 use super::poiseuille::{Channel, CrossLaw};
-use super::{cross_poiseuille_in, startup_poiseuille_in, HOURGLASS_CONTROL};
+use super::{cross_poiseuille_in, operator_label, startup_poiseuille_in, HOURGLASS_CONTROL};
 use crate::plot::{Axis, Chart, Line, Series, PALETTE};
 use crate::scene::{DensityKernel, Precision, ViscosityOperator, Walls};
+use std::time::Instant;
 
 /// One run of a sweep.
 #[derive(Debug, Clone)]
@@ -24,8 +25,10 @@ pub struct Trial {
 #[derive(Debug, Clone)]
 pub struct Measured {
     pub trial: Trial,
-    /// L-infinity error relative to the peak speed.
-    pub error: f64,
+    /// L-infinity error relative to the peak speed; `None` where the guard stopped the run,
+    /// which only a trial above the Eq. (10) bound may end with (any other failure ends the
+    /// sweep).
+    pub error: Option<f64>,
     pub wall_s: f64,
     /// Whether no other trial of the same case is at least as good on both and better on one.
     pub pareto: bool,
@@ -60,9 +63,23 @@ pub fn trials(quick: bool) -> Vec<Trial> {
         let setting = format!("{across} across, paper's operator, hourglass control {HOURGLASS_CONTROL}");
         add("start-up", "hourglass control", setting, controlled(across));
     }
-    let safety: &[f64] = if quick { &[0.5] } else { &[0.5, 0.25] };
+    let safety: &[f64] = if quick { &[0.5, 8.0] } else { &[0.5, 0.25, 2.0, 4.0, 8.0] };
     for &f in safety {
         add("start-up", "dt safety factor", format!("{f} x the Eq. (10) bound"), Channel { safety_factor: f, ..base });
+    }
+    if !quick {
+        let above = [
+            (ViscosityOperator::Morris, 0.0, [2.0, 4.0]),
+            (ViscosityOperator::Stress, 0.0, [4.0, 16.0]),
+            (ViscosityOperator::Stress, HOURGLASS_CONTROL, [2.0, 4.0]),
+        ];
+        for (op, hg, factors) in above {
+            for f in factors {
+                let channel = Channel { safety_factor: f, hourglass_control: hg, ..Channel::morris(base_across, op) };
+                let setting = format!("{f} x the Eq. (10) bound, {}", operator_label(op, hg));
+                add("start-up", "dt safety factor", setting, channel);
+            }
+        }
     }
     let machs: &[f64] = if quick { &[0.1] } else { &[0.1, 1e-3, 1e-4] };
     for &mach in machs {
@@ -107,13 +124,23 @@ pub fn trials(quick: bool) -> Vec<Trial> {
 pub fn run(trials: Vec<Trial>) -> Result<Vec<Measured>, String> {
     let mut out = Vec::with_capacity(trials.len());
     for trial in trials {
-        let r = if trial.channel.cross.is_some() {
-            cross_poiseuille_in(&trial.channel, None)?
+        let started = Instant::now();
+        let result = if trial.channel.cross.is_some() {
+            cross_poiseuille_in(&trial.channel, None)
         } else {
-            startup_poiseuille_in(&trial.channel, None)?
+            startup_poiseuille_in(&trial.channel, None)
         };
-        println!("{:<9} {:<22} {:<40} error {:>8.4}  {:>7.1} s", trial.case, trial.knob, trial.setting, r.error, r.wall_s);
-        out.push(Measured { trial, error: r.error, wall_s: r.wall_s, pareto: false });
+        let (error, wall_s) = match result {
+            Ok(r) => (Some(r.error), r.wall_s),
+            Err(guard) if trial.channel.safety_factor > 1.0 => {
+                println!("{:<9} {:<22} {:<40} {guard}", trial.case, trial.knob, trial.setting);
+                (None, started.elapsed().as_secs_f64())
+            }
+            Err(e) => return Err(e),
+        };
+        let shown = error_cell(error);
+        println!("{:<9} {:<22} {:<40} error {shown:>8}  {wall_s:>7.1} s", trial.case, trial.knob, trial.setting);
+        out.push(Measured { trial, error, wall_s, pareto: false });
     }
     mark_pareto(&mut out);
     Ok(out)
@@ -124,12 +151,16 @@ pub fn run(trials: Vec<Trial>) -> Result<Vec<Measured>, String> {
 const SAME_ERROR: f64 = 0.01;
 
 /// Marks the trials that no other trial of the same case dominates (error and time both no
-/// worse, one better; errors within 1 % equal).
+/// worse, one better; errors within 1 % equal). A run the guard stopped is on no front.
 pub fn mark_pareto(m: &mut [Measured]) {
-    let points: Vec<(&str, f64, f64)> = m.iter().map(|x| (x.trial.case, x.error, x.wall_s)).collect();
+    let points: Vec<(&str, Option<f64>, f64)> = m.iter().map(|x| (x.trial.case, x.error, x.wall_s)).collect();
     for (k, x) in m.iter_mut().enumerate() {
-        let (case, e, w) = points[k];
+        let (case, Some(e), w) = points[k] else {
+            x.pareto = false;
+            continue;
+        };
         x.pareto = !points.iter().enumerate().any(|(j, &(c, e2, w2))| {
+            let Some(e2) = e2 else { return false };
             let no_worse = e2 <= e * (1.0 + SAME_ERROR);
             let better = e2 < e * (1.0 - SAME_ERROR);
             j != k && c == case && no_worse && w2 <= w && (better || w2 < w)
@@ -137,22 +168,28 @@ pub fn mark_pareto(m: &mut [Measured]) {
     }
 }
 
+/// The error in a table cell: "unstable" where the guard stopped the run.
+fn error_cell(error: Option<f64>) -> String {
+    error.map_or("unstable".into(), |e| format!("{e:.4}"))
+}
+
 /// The table, Markdown.
 pub fn markdown(m: &[Measured]) -> String {
     let mut s = String::from(
         "# coil tradeoff\n\nEach row changes one knob of the base (start-up: Morris et al.'s channel, Laplacian \
          operator, 20 across, mirrored walls, f64, Mach 0.01, poly6 density, dt at the Eq. (10) bound; Cross: K = 10 s, n = 0.5, \
-         paper's operator, 10 across). Error: L-infinity against the reference over the peak speed. \
+         paper's operator, 10 across). Error: L-infinity against the reference over the peak speed; \
+         \"unstable\": the guard stopped the run (wall s: until then). \
          `*`: on the Pareto front of its case (errors within 1 % count as equal).\n\n\
          | case | knob | setting | error | wall s | front |\n|---|---|---|---:|---:|---|\n",
     );
     for x in m {
         s += &format!(
-            "| {} | {} | {} | {:.4} | {:.1} | {} |\n",
+            "| {} | {} | {} | {} | {:.1} | {} |\n",
             x.trial.case,
             x.trial.knob,
             x.trial.setting,
-            x.error,
+            error_cell(x.error),
             x.wall_s,
             if x.pareto { "*" } else { "" }
         );
@@ -165,8 +202,13 @@ pub fn csv(m: &[Measured]) -> String {
     let mut s = String::from("case,knob,setting,error,wall_s,pareto\n");
     for x in m {
         s += &format!(
-            "{},\"{}\",\"{}\",{:.6e},{:.3},{}\n",
-            x.trial.case, x.trial.knob, x.trial.setting, x.error, x.wall_s, x.pareto
+            "{},\"{}\",\"{}\",{},{:.3},{}\n",
+            x.trial.case,
+            x.trial.knob,
+            x.trial.setting,
+            x.error.map_or("unstable".into(), |e| format!("{e:.6e}")),
+            x.wall_s,
+            x.pareto
         );
     }
     s
@@ -184,11 +226,11 @@ pub fn chart(m: &[Measured]) -> Chart {
         series.push(Series {
             label: format!("{case} trials"),
             color,
-            points: of_case.iter().map(|x| [x.wall_s, x.error]).collect(),
+            points: of_case.iter().filter_map(|x| Some([x.wall_s, x.error?])).collect(),
             line: Line::None,
             marker: 3.0,
         });
-        let mut front: Vec<[f64; 2]> = of_case.iter().filter(|x| x.pareto).map(|x| [x.wall_s, x.error]).collect();
+        let mut front: Vec<[f64; 2]> = of_case.iter().filter(|x| x.pareto).filter_map(|x| Some([x.wall_s, x.error?])).collect();
         front.sort_by(|a, b| a[0].total_cmp(&b[0]));
         series.push(Series { label: format!("{case} Pareto front"), color, points: front, line: Line::Solid, marker: 5.0 });
     }
@@ -199,7 +241,7 @@ pub fn chart(m: &[Measured]) -> Chart {
 mod tests {
     use super::*;
 
-    fn measured(case: &'static str, error: f64, wall_s: f64) -> Measured {
+    fn measured(case: &'static str, error: Option<f64>, wall_s: f64) -> Measured {
         let channel = Channel::morris(10, ViscosityOperator::Laplacian);
         Measured { trial: Trial { case, knob: "k", setting: String::new(), channel }, error, wall_s, pareto: false }
     }
@@ -207,17 +249,21 @@ mod tests {
     #[test]
     fn the_pareto_front_keeps_what_nothing_beats_on_both_within_a_case() {
         let mut m = vec![
-            measured("start-up", 0.1, 1.0),
-            measured("start-up", 0.01, 10.0),
-            measured("start-up", 0.05, 20.0),
-            measured("start-up", 0.1, 2.0),
-            measured("Cross", 0.5, 100.0),
-            measured("Cross", 0.4999, 200.0),
+            measured("start-up", Some(0.1), 1.0),
+            measured("start-up", Some(0.01), 10.0),
+            measured("start-up", Some(0.05), 20.0),
+            measured("start-up", Some(0.1), 2.0),
+            measured("Cross", Some(0.5), 100.0),
+            measured("Cross", Some(0.4999), 200.0),
+            measured("start-up", None, 0.5),
         ];
         mark_pareto(&mut m);
         let front: Vec<bool> = m.iter().map(|x| x.pareto).collect();
         // Slower and no better than the first; slower and worse than the second; the Cross
-        // trials are compared with Cross trials only, and 0.02 % less error buys nothing.
-        assert_eq!(front, [true, true, false, false, true, false]);
+        // trials are compared with Cross trials only, and 0.02 % less error buys nothing; the
+        // run the guard stopped, though fastest, is on no front and beats nothing.
+        assert_eq!(front, [true, true, false, false, true, false, false]);
+        assert_eq!(chart(&m).series[0].points.len(), 4, "the stopped run is not plotted");
+        assert!(markdown(&m).contains("| unstable | 0.5 |"), "{}", markdown(&m));
     }
 }
