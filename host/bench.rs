@@ -11,6 +11,7 @@ use crate::scene::{Precision, Scene};
 use crate::scene_override::{apply, Override};
 use crate::setup::{initial_particles, InitialParticles};
 use crate::simulation::Simulation;
+use crate::statistics::Sorted;
 use coil_kernels::Real;
 use std::time::Instant;
 
@@ -135,10 +136,9 @@ pub fn dam_break(per_edge: usize) -> Scene {
 }
 
 /// The median and the 10th and 90th percentiles of `times`.
-fn percentiles(mut times: Vec<f64>) -> (f64, f64, f64) {
-    times.sort_by(f64::total_cmp);
-    let at = |q: f64| times[((times.len() - 1) as f64 * q).round() as usize];
-    (at(0.5), at(0.1), at(0.9))
+fn percentiles(times: Vec<f64>) -> (f64, f64, f64) {
+    let sorted = Sorted::new(times);
+    (sorted.median(), sorted.quantile(0.1), sorted.quantile(0.9))
 }
 
 fn step<R: Real, M: Model<R>, S: Stepping<R, M>>(state: &mut S) -> Result<(), String> {

@@ -20,5 +20,6 @@ pub mod scene;
 pub mod scene_override;
 pub mod setup;
 pub mod simulation;
+pub mod statistics;
 pub mod time_step;
 pub mod validation;

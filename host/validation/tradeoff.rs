@@ -1,12 +1,14 @@
 //! `coil tradeoff`: what each knob that trades speed for accuracy buys, measured on the two
 //! Poiseuille cases. Each trial changes one knob of a base channel and records the error
 //! against the reference and the wall time; the points no other trial beats on both are the
-//! Pareto front.
+//! Pareto front. Each trial runs a given number of times: its error must repeat to the bit (the
+//! CPU backend is deterministic), its wall time is the median.
 
 use super::poiseuille::{Channel, CrossLaw};
 use super::{cross_poiseuille_in, operator_label, startup_poiseuille_in, HOURGLASS_CONTROL};
 use crate::plot::{Axis, Chart, Line, Series, PALETTE};
 use crate::scene::{DensityKernel, Precision, ViscosityOperator, Walls};
+use crate::statistics::Sorted;
 use std::time::Instant;
 
 /// One run of a sweep.
@@ -29,7 +31,11 @@ pub struct Measured {
     /// which only a trial above the Eq. (10) bound may end with (any other failure ends the
     /// sweep).
     pub error: Option<f64>,
+    /// Median wall time of the repeats (s), until the guard stopped the run where it did.
     pub wall_s: f64,
+    /// Fastest and slowest repeat (s).
+    pub wall_range_s: [f64; 2],
+    pub repeats: usize,
     /// Whether no other trial of the same case is at least as good on both and better on one.
     pub pareto: bool,
 }
@@ -120,30 +126,80 @@ pub fn trials(quick: bool) -> Vec<Trial> {
     t
 }
 
-/// Runs every trial, printing each as it finishes, and marks the Pareto fronts.
-pub fn run(trials: Vec<Trial>) -> Result<Vec<Measured>, String> {
-    let mut out = Vec::with_capacity(trials.len());
+/// What a sweep measured, and why it ended early where it did.
+pub struct Sweep {
+    pub measured: Vec<Measured>,
+    /// The failure that ended the sweep before its last trial.
+    pub failure: Option<String>,
+}
+
+/// Runs every trial `repeats` times, printing each as it finishes, and marks the Pareto fronts
+/// of what was measured. A failure other than the guard stopping a run above the Eq. (10)
+/// bound ends the sweep; the trials measured before it are kept.
+pub fn run(trials: Vec<Trial>, repeats: usize) -> Sweep {
+    let mut measured = Vec::with_capacity(trials.len());
+    let mut failure = None;
     for trial in trials {
+        match measure(&trial, repeats) {
+            Ok((error, wall)) => {
+                let (wall_s, wall_range_s) = (wall.median(), [wall.min(), wall.max()]);
+                let shown = error_cell(error);
+                println!(
+                    "{:<9} {:<22} {:<40} error {shown:>8}  {wall_s:>7.1} s ({:.1} to {:.1})",
+                    trial.case, trial.knob, trial.setting, wall_range_s[0], wall_range_s[1]
+                );
+                measured.push(Measured { trial, error, wall_s, wall_range_s, repeats, pareto: false });
+            }
+            Err(e) => {
+                failure = Some(format!("{} / {}: {e}", trial.case, trial.setting));
+                break;
+            }
+        }
+    }
+    mark_pareto(&mut measured);
+    Sweep { measured, failure }
+}
+
+/// Runs `trial` `repeats` times: its error (`None` where the guard stopped it), which every
+/// repeat must reproduce exactly, and the wall times.
+fn measure(trial: &Trial, repeats: usize) -> Result<(Option<f64>, Sorted), String> {
+    let mut errors = Vec::with_capacity(repeats);
+    let mut walls = Vec::with_capacity(repeats);
+    for repeat in 0..repeats {
         let started = Instant::now();
         let result = if trial.channel.cross.is_some() {
             cross_poiseuille_in(&trial.channel, None)
         } else {
             startup_poiseuille_in(&trial.channel, None)
         };
-        let (error, wall_s) = match result {
-            Ok(r) => (Some(r.error), r.wall_s),
+        match result {
+            Ok(r) => {
+                errors.push(Some(r.error));
+                walls.push(r.wall_s);
+            }
             Err(guard) if trial.channel.safety_factor > 1.0 => {
-                println!("{:<9} {:<22} {:<40} {guard}", trial.case, trial.knob, trial.setting);
-                (None, started.elapsed().as_secs_f64())
+                if repeat == 0 {
+                    println!("{:<9} {:<22} {:<40} {guard}", trial.case, trial.knob, trial.setting);
+                }
+                errors.push(None);
+                walls.push(started.elapsed().as_secs_f64());
             }
             Err(e) => return Err(e),
-        };
-        let shown = error_cell(error);
-        println!("{:<9} {:<22} {:<40} error {shown:>8}  {wall_s:>7.1} s", trial.case, trial.knob, trial.setting);
-        out.push(Measured { trial, error, wall_s, pareto: false });
+        }
     }
-    mark_pareto(&mut out);
-    Ok(out)
+    same_every_repeat(&errors)?;
+    Ok((errors[0], Sorted::new(walls)))
+}
+
+/// Checks that every repeat measured the same error, to the bit: a difference means a run
+/// depends on something other than its scene, such as the thread count.
+fn same_every_repeat(errors: &[Option<f64>]) -> Result<(), String> {
+    let bits = |e: &Option<f64>| e.map(f64::to_bits);
+    if errors.iter().all(|e| bits(e) == bits(&errors[0])) {
+        return Ok(());
+    }
+    let shown: Vec<String> = errors.iter().map(|&e| e.map_or("unstable".into(), |e| format!("{e:e}"))).collect();
+    Err(format!("the repeats measured different errors ({}): the run is not deterministic", shown.join(", ")))
 }
 
 /// Errors within this fraction of each other count as equal: a knob that changes the error
@@ -175,22 +231,26 @@ fn error_cell(error: Option<f64>) -> String {
 
 /// The table, Markdown.
 pub fn markdown(m: &[Measured]) -> String {
-    let mut s = String::from(
+    let repeats = m.first().map_or(0, |x| x.repeats);
+    let mut s = format!(
         "# coil tradeoff\n\nEach row changes one knob of the base (start-up: Morris et al.'s channel, Laplacian \
          operator, 20 across, mirrored walls, f64, Mach 0.01, poly6 density, dt at the Eq. (10) bound; Cross: K = 10 s, n = 0.5, \
          paper's operator, 10 across). Error: L-infinity against the reference over the peak speed; \
-         \"unstable\": the guard stopped the run (wall s: until then). \
+         \"unstable\": the guard stopped the run (wall s: until then). Wall s: the median of {repeats} runs \
+         of each trial (range: fastest to slowest). \
          `*`: on the Pareto front of its case (errors within 1 % count as equal).\n\n\
-         | case | knob | setting | error | wall s | front |\n|---|---|---|---:|---:|---|\n",
+         | case | knob | setting | error | wall s | range s | front |\n|---|---|---|---:|---:|---:|---|\n",
     );
     for x in m {
         s += &format!(
-            "| {} | {} | {} | {} | {:.1} | {} |\n",
+            "| {} | {} | {} | {} | {:.1} | {:.1} to {:.1} | {} |\n",
             x.trial.case,
             x.trial.knob,
             x.trial.setting,
             error_cell(x.error),
             x.wall_s,
+            x.wall_range_s[0],
+            x.wall_range_s[1],
             if x.pareto { "*" } else { "" }
         );
     }
@@ -199,15 +259,18 @@ pub fn markdown(m: &[Measured]) -> String {
 
 /// The table, CSV.
 pub fn csv(m: &[Measured]) -> String {
-    let mut s = String::from("case,knob,setting,error,wall_s,pareto\n");
+    let mut s = String::from("case,knob,setting,error,wall_s,wall_min_s,wall_max_s,repeats,pareto\n");
     for x in m {
         s += &format!(
-            "{},\"{}\",\"{}\",{},{:.3},{}\n",
+            "{},\"{}\",\"{}\",{},{:.3},{:.3},{:.3},{},{}\n",
             x.trial.case,
             x.trial.knob,
             x.trial.setting,
             x.error.map_or("unstable".into(), |e| format!("{e:.6e}")),
             x.wall_s,
+            x.wall_range_s[0],
+            x.wall_range_s[1],
+            x.repeats,
             x.pareto
         );
     }
@@ -243,7 +306,8 @@ mod tests {
 
     fn measured(case: &'static str, error: Option<f64>, wall_s: f64) -> Measured {
         let channel = Channel::morris(10, ViscosityOperator::Laplacian);
-        Measured { trial: Trial { case, knob: "k", setting: String::new(), channel }, error, wall_s, pareto: false }
+        let trial = Trial { case, knob: "k", setting: String::new(), channel };
+        Measured { trial, error, wall_s, wall_range_s: [wall_s, wall_s], repeats: 1, pareto: false }
     }
 
     #[test]
@@ -264,6 +328,16 @@ mod tests {
         // run the guard stopped, though fastest, is on no front and beats nothing.
         assert_eq!(front, [true, true, false, false, true, false, false]);
         assert_eq!(chart(&m).series[0].points.len(), 4, "the stopped run is not plotted");
-        assert!(markdown(&m).contains("| unstable | 0.5 |"), "{}", markdown(&m));
+        assert!(markdown(&m).contains("| unstable | 0.5 | 0.5 to 0.5 |"), "{}", markdown(&m));
+    }
+
+    #[test]
+    fn repeats_must_measure_the_same_error_to_the_bit() {
+        assert!(same_every_repeat(&[Some(0.01), Some(0.01), Some(0.01)]).is_ok());
+        assert!(same_every_repeat(&[None, None]).is_ok());
+        let one_ulp_more = f64::from_bits(0.01f64.to_bits() + 1);
+        let drift = same_every_repeat(&[Some(0.01), Some(one_ulp_more), Some(0.01)]).unwrap_err();
+        assert!(drift.contains("not deterministic"), "{drift}");
+        assert!(same_every_repeat(&[Some(0.01), None]).is_err(), "stopped once, not the other time");
     }
 }
