@@ -1,3 +1,4 @@
+#![allow(clippy::neg_cmp_op_on_partial_ord, reason = "`!(a < b)` is how a check here also refuses NaN")]
 pub use coil_kernels as kernels;
 pub mod bench;
 pub mod bench_report;

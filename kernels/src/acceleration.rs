@@ -69,7 +69,7 @@ impl<R: Real> ViscousOperator<R> for StressDivergence<'_, R> {
         grad_w: Vec3<R>,
         _: &SmoothingKernels<R>,
     ) -> Vec3<R> {
-        own.add(self.stress_over_density2(j, density_j)).dot(grad_w)
+        (*own + self.stress_over_density2(j, density_j)).dot(grad_w)
     }
 }
 

@@ -115,9 +115,9 @@ impl<R: Real> ViscousOperator<R> for HourglassControlledStress<'_, R> {
         let gradient_j = self.gradient_at(j);
         let nu_j = self.viscosity.at(j);
         let inv_rho_j = R::ONE / density_j;
-        let stress = own.stress_over_density2.add(rate_of_deformation(gradient_j).scaled(nu_j * inv_rho_j)).dot(grad_w);
+        let stress = (own.stress_over_density2 + rate_of_deformation(gradient_j).scaled(nu_j * inv_rho_j)).dot(grad_w);
         let [x, y, z] = self.velocity.at(j);
-        let residual = Vec3::new(x, y, z) - own.velocity + own.gradient.add(gradient_j).dot(r_ij) * R::from_f64(0.5);
+        let residual = Vec3::new(x, y, z) - own.velocity + (own.gradient + gradient_j).dot(r_ij) * R::from_f64(0.5);
         let nu_ij = own.half_viscosity + nu_j * R::from_f64(0.5);
         stress + residual * (self.coefficient * nu_ij * kernels.morris_laplacian(r2) * inv_rho_j)
     }

@@ -16,6 +16,7 @@
 //! [`nozzle::nozzle_pass`] (jet scenes only) and
 //! [`leapfrog::leapfrog_pass`]; then [`diagnostics`] guards the run.
 #![no_std]
+#![allow(clippy::neg_cmp_op_on_partial_ord, reason = "`!(a < b)` is how a check here also refuses NaN")]
 #![cfg_attr(target_arch = "nvptx64", feature(abi_ptx, link_llvm_intrinsics, stdarch_nvptx))]
 // `link_llvm_intrinsics` is how the device reaches NVVM's fast math (see `real`).
 #![cfg_attr(target_arch = "nvptx64", allow(internal_features))]

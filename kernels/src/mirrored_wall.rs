@@ -73,7 +73,7 @@ pub fn fluid_at<R: Real, T: Topology>(
             let p = pressure(density.at(j), fluid);
             w0 += w;
             w1 += q * w;
-            w2 = w2.add(SymTensor::outer(q).scaled(w));
+            w2 = w2 + SymTensor::outer(q).scaled(w);
             v0 += v * w;
             v1.add_outer(q * w, v);
             p0 += p * w;
@@ -88,7 +88,7 @@ pub fn fluid_at<R: Real, T: Topology>(
     let inv_w0 = R::ONE / w0;
     let mean_q = w1 * inv_w0;
     let mean_v = v0 * inv_w0;
-    let covariance = w2.add(SymTensor::outer(mean_q).scaled(-w0));
+    let covariance = w2 + SymTensor::outer(mean_q).scaled(-w0);
     // Offsets spread less than 0.03 h about their mean (one neighbor, at a free surface's edge)
     // leave a covariance of rounding noise, whose inverse is arbitrary; the mean is all they
     // determine.

@@ -120,19 +120,6 @@ impl<R: Real> Mat3<R> {
         )
     }
 
-    /// The sum `M + N`, written out like `add_outer`.
-    #[inline(always)]
-    pub fn add(self, o: Self) -> Self {
-        let (a, b) = (self.m, o.m);
-        Self {
-            m: [
-                [a[0][0] + b[0][0], a[0][1] + b[0][1], a[0][2] + b[0][2]],
-                [a[1][0] + b[1][0], a[1][1] + b[1][1], a[1][2] + b[1][2]],
-                [a[2][0] + b[2][0], a[2][1] + b[2][1], a[2][2] + b[2][2]],
-            ],
-        }
-    }
-
     /// The product `M^T · v`.
     #[inline(always)]
     pub fn transpose_dot(self, v: Vec3<R>) -> Vec3<R> {
@@ -155,6 +142,22 @@ impl<R: Real> Mat3<R> {
             xy: m[0][1] + m[1][0],
             xz: m[0][2] + m[2][0],
             yz: m[1][2] + m[2][1],
+        }
+    }
+}
+
+/// The sum `M + N`, written out like `add_outer`.
+impl<R: Real> Add for Mat3<R> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        let (a, b) = (self.m, o.m);
+        Self {
+            m: [
+                [a[0][0] + b[0][0], a[0][1] + b[0][1], a[0][2] + b[0][2]],
+                [a[1][0] + b[1][0], a[1][1] + b[1][1], a[1][2] + b[1][2]],
+                [a[2][0] + b[2][0], a[2][1] + b[2][1], a[2][2] + b[2][2]],
+            ],
         }
     }
 }
@@ -191,18 +194,6 @@ impl<R: Real> SymTensor<R> {
     #[inline(always)]
     pub fn scaled(self, s: R) -> Self {
         Self { xx: self.xx * s, yy: self.yy * s, zz: self.zz * s, xy: self.xy * s, xz: self.xz * s, yz: self.yz * s }
-    }
-
-    #[inline(always)]
-    pub fn add(self, o: Self) -> Self {
-        Self {
-            xx: self.xx + o.xx,
-            yy: self.yy + o.yy,
-            zz: self.zz + o.zz,
-            xy: self.xy + o.xy,
-            xz: self.xz + o.xz,
-            yz: self.yz + o.yz,
-        }
     }
 
     /// The matrix-vector product `T · v`.
@@ -249,5 +240,20 @@ impl<R: Real> SymTensor<R> {
             (c01 * b.x + c11 * b.y + c12 * b.z) * inv,
             (c02 * b.x + c12 * b.y + c22 * b.z) * inv,
         ))
+    }
+}
+
+impl<R: Real> Add for SymTensor<R> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Self {
+            xx: self.xx + o.xx,
+            yy: self.yy + o.yy,
+            zz: self.zz + o.zz,
+            xy: self.xy + o.xy,
+            xz: self.xz + o.xz,
+            yz: self.yz + o.yz,
+        }
     }
 }
