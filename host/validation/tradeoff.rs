@@ -137,10 +137,36 @@ pub struct Sweep {
 /// of what was measured. A failure other than the guard stopping a run above the Eq. (10)
 /// bound ends the sweep; the trials measured before it are kept.
 pub fn run(trials: Vec<Trial>, repeats: usize) -> Sweep {
+    sweep(trials, repeats, run_once)
+}
+
+/// How one run of a trial ended: its error, or the guard's message.
+enum Outcome {
+    Finished(f64),
+    Stopped(String),
+}
+
+/// One run of `trial` and its wall time (s); the guard may stop only a run above the bound.
+fn run_once(trial: &Trial) -> Result<(Outcome, f64), String> {
+    let started = Instant::now();
+    let result = if trial.channel.cross.is_some() {
+        cross_poiseuille_in(&trial.channel, None)
+    } else {
+        startup_poiseuille_in(&trial.channel, None)
+    };
+    match result {
+        Ok(r) => Ok((Outcome::Finished(r.error), r.wall_s)),
+        Err(guard) if trial.channel.safety_factor > 1.0 => Ok((Outcome::Stopped(guard), started.elapsed().as_secs_f64())),
+        Err(e) => Err(e),
+    }
+}
+
+/// [`run`] with the runs made by `run_once`.
+fn sweep(trials: Vec<Trial>, repeats: usize, mut run_once: impl FnMut(&Trial) -> Result<(Outcome, f64), String>) -> Sweep {
     let mut measured = Vec::with_capacity(trials.len());
     let mut failure = None;
     for trial in trials {
-        match measure(&trial, repeats) {
+        match measure(&trial, repeats, &mut run_once) {
             Ok((error, wall)) => {
                 let (wall_s, wall_range_s) = (wall.median(), [wall.min(), wall.max()]);
                 let shown = error_cell(error);
@@ -162,30 +188,25 @@ pub fn run(trials: Vec<Trial>, repeats: usize) -> Sweep {
 
 /// Runs `trial` `repeats` times: its error (`None` where the guard stopped it), which every
 /// repeat must reproduce exactly, and the wall times.
-fn measure(trial: &Trial, repeats: usize) -> Result<(Option<f64>, Sorted), String> {
+fn measure(
+    trial: &Trial,
+    repeats: usize,
+    run_once: &mut impl FnMut(&Trial) -> Result<(Outcome, f64), String>,
+) -> Result<(Option<f64>, Sorted), String> {
     let mut errors = Vec::with_capacity(repeats);
     let mut walls = Vec::with_capacity(repeats);
     for repeat in 0..repeats {
-        let started = Instant::now();
-        let result = if trial.channel.cross.is_some() {
-            cross_poiseuille_in(&trial.channel, None)
-        } else {
-            startup_poiseuille_in(&trial.channel, None)
-        };
-        match result {
-            Ok(r) => {
-                errors.push(Some(r.error));
-                walls.push(r.wall_s);
-            }
-            Err(guard) if trial.channel.safety_factor > 1.0 => {
+        let (outcome, wall_s) = run_once(trial)?;
+        errors.push(match outcome {
+            Outcome::Finished(error) => Some(error),
+            Outcome::Stopped(guard) => {
                 if repeat == 0 {
                     println!("{:<9} {:<22} {:<40} {guard}", trial.case, trial.knob, trial.setting);
                 }
-                errors.push(None);
-                walls.push(started.elapsed().as_secs_f64());
+                None
             }
-            Err(e) => return Err(e),
-        }
+        });
+        walls.push(wall_s);
     }
     same_every_repeat(&errors)?;
     Ok((errors[0], Sorted::new(walls)))
@@ -329,6 +350,40 @@ mod tests {
         assert_eq!(front, [true, true, false, false, true, false, false]);
         assert_eq!(chart(&m).series[0].points.len(), 4, "the stopped run is not plotted");
         assert!(markdown(&m).contains("| unstable | 0.5 | 0.5 to 0.5 |"), "{}", markdown(&m));
+    }
+
+    /// A scripted sweep: each trial's runs give the listed errors (`None`: stopped) and times.
+    fn scripted(script: Vec<Vec<Option<f64>>>, repeats: usize) -> (Sweep, usize) {
+        let trials: Vec<Trial> =
+            (0..script.len()).map(|k| Trial { setting: format!("trial {k}"), ..measured("start-up", None, 0.0).trial }).collect();
+        let mut runs = script.into_iter().map(|t| t.into_iter()).collect::<Vec<_>>();
+        let mut made = 0;
+        let sweep = sweep(trials, repeats, |trial| {
+            made += 1;
+            let k: usize = trial.setting["trial ".len()..].parse().expect("a scripted trial");
+            match runs[k].next().expect("a scripted run") {
+                Some(error) if error < 0.0 => Err("a scene that fails".into()),
+                Some(error) => Ok((Outcome::Finished(error), made as f64)),
+                None => Ok((Outcome::Stopped("stopped".into()), made as f64)),
+            }
+        });
+        (sweep, made)
+    }
+
+    #[test]
+    fn a_sweep_takes_the_median_time_and_keeps_what_it_measured_before_a_failure() {
+        let (done, made) = scripted(vec![vec![Some(0.1); 3], vec![None; 3]], 3);
+        assert_eq!((done.measured.len(), made, done.failure), (2, 6, None));
+        assert_eq!((done.measured[0].wall_s, done.measured[0].wall_range_s), (2.0, [1.0, 3.0]));
+        assert_eq!((done.measured[1].error, done.measured[1].wall_s), (None, 5.0));
+        // The second trial fails on its second run: the first is kept, the third never runs.
+        let (failed, made) = scripted(vec![vec![Some(0.1); 3], vec![Some(0.2), Some(-1.0)], vec![Some(0.3); 3]], 3);
+        assert_eq!((failed.measured.len(), made), (1, 5));
+        let why = failed.failure.expect("a failure");
+        assert!(why.contains("trial 1") && why.contains("a scene that fails"), "{why}");
+        let (drifting, _) = scripted(vec![vec![Some(0.1), Some(0.1)], vec![Some(0.2), Some(0.25)]], 2);
+        assert_eq!(drifting.measured.len(), 1);
+        assert!(drifting.failure.expect("a failure").contains("not deterministic"));
     }
 
     #[test]
