@@ -155,10 +155,16 @@ fn automatic_dt_follows_equation_10() {
     assert!((dt - 2e-5).abs() < 1e-15 && limit == Limit::Viscous, "{dt} {limit:?}");
 }
 
+/// The box of `automatic_dt_follows_equation_10` (bound 2e-4 s, acoustic) with a
+/// `[simulation.time_step]` table of `entries`.
+fn box_with_time_step(entries: &str) -> String {
+    let base = common::box_scene(0.02, [0.2; 3], [0.2; 3], "");
+    base.replace("precision = \"f64\"", &format!("precision = \"f64\"\n[simulation.time_step]\n{entries}"))
+}
+
 #[test]
 fn fixed_dt_above_the_bound_is_refused_unless_overridden() {
-    let base = common::box_scene(0.02, [0.2; 3], [0.2; 3], "");
-    let above = base.replace("precision = \"f64\"", "precision = \"f64\"\n[simulation.time_step]\nfixed_s = 3e-4");
+    let above = box_with_time_step("fixed_s = 3e-4");
     let err = coil::scene::Scene::parse(&above, "box.toml").expect_err("refused");
     assert_eq!(err.field, "simulation.time_step.fixed_s");
     assert!(err.reason.contains("Eq. (10)") && err.reason.contains("2.000e-4"), "{}", err.reason);
@@ -168,8 +174,7 @@ fn fixed_dt_above_the_bound_is_refused_unless_overridden() {
 
 #[test]
 fn a_safety_factor_above_one_is_refused_unless_overridden_and_then_scales_the_bound() {
-    let base = common::box_scene(0.02, [0.2; 3], [0.2; 3], "");
-    let above = base.replace("precision = \"f64\"", "precision = \"f64\"\n[simulation.time_step]\nsafety_factor = 4.0");
+    let above = box_with_time_step("safety_factor = 4.0");
     let err = coil::scene::Scene::parse(&above, "box.toml").expect_err("refused");
     assert_eq!(err.field, "simulation.time_step.safety_factor");
     assert!(err.reason.contains("Eq. (10)") && err.reason.contains("allow_above_stability_bound"), "{}", err.reason);
