@@ -3,14 +3,13 @@
 //! Stored as bytes so that any plain-data element type (the run's `Real`, `u32`, the
 //! diagnostics' figures) needs no CUDA trait of its own.
 
-use super::gpu::{CudaError, Gpu};
+use super::gpu::{Buffer, CudaError, Gpu};
 use coil_kernels::counting_sort::Counters;
 use coil_kernels::view::{Vec3View, Vec3ViewMut, View, ViewMut};
-use cudarc::driver::CudaSlice;
 use std::marker::PhantomData;
 
 pub struct DeviceArray<T> {
-    bytes: CudaSlice<u8>,
+    bytes: Buffer,
     len: usize,
     address: u64,
     _t: PhantomData<T>,
@@ -29,7 +28,7 @@ fn as_bytes_mut<T: Copy>(s: &mut [T]) -> &mut [u8] {
 impl<T: Copy> DeviceArray<T> {
     /// `len` zeroed elements; `what` names the array in an out-of-memory error.
     pub fn zeros(gpu: &Gpu, len: usize, what: &str) -> Result<Self, CudaError> {
-        let bytes = gpu.zeros::<u8>(len * std::mem::size_of::<T>(), what)?;
+        let bytes = gpu.zeros(len * std::mem::size_of::<T>(), what)?;
         let address = gpu.address(&bytes);
         Ok(Self { bytes, len, address, _t: PhantomData })
     }

@@ -1,14 +1,21 @@
 //! The CUDA device of a run: its context and stream, the kernels' PTX module (compiled by
 //! build.rs from `kernels/`), launches by kernel name, and allocations with clear errors.
+//!
+//! [`Gpu::emulated`] stands in for a device where there is none: its memory is host memory and
+//! a launch runs the kernels' host builds (`coil_kernels::ptx::ENTRIES`) over every thread of
+//! the grid with rayon, so the backend's host side runs and is tested without a GPU.
 
+use coil_kernels::ptx::{Emulated, Param, ENTRIES};
 use cudarc::driver::{
     sys, CudaContext, CudaEvent, CudaFunction, CudaModule, CudaSlice, CudaStream, DevicePtr, DeviceRepr, DriverError,
-    LaunchConfig, PushKernelArg, ValidAsZeroBits,
+    LaunchConfig, PushKernelArg,
 };
 use cudarc::nvrtc::Ptx;
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::fmt;
 use std::sync::Arc;
+use std::time::Instant;
 
 /// The kernels crate as PTX.
 pub const PTX: &str = include_str!(concat!(env!("OUT_DIR"), "/coil_kernels.ptx"));
@@ -69,16 +76,67 @@ pub struct ByValue<T>(pub T);
 // device pointers), laid out alike on the host and on nvptx64.
 unsafe impl<T: Copy> DeviceRepr for ByValue<T> {}
 
-pub struct Gpu {
+/// A CUDA device, through the driver.
+struct Device {
     ctx: Arc<CudaContext>,
-    pub stream: Arc<CudaStream>,
+    stream: Arc<CudaStream>,
     module: Arc<CudaModule>,
     functions: HashMap<String, CudaFunction>,
+}
+
+/// What runs the kernels.
+enum Engine {
+    Cuda(Device),
+    /// The kernels' host builds, over host memory.
+    Emulated,
+}
+
+pub struct Gpu {
+    engine: Engine,
     /// Synchronise after every launch, so a failure names its kernel (COIL_CUDA_SYNC=1).
     sync_each_launch: bool,
     last_kernel: &'static str,
-    /// While profiling: each launch's kernel and the events recorded around it.
-    profile: Option<Vec<(&'static str, CudaEvent, CudaEvent)>>,
+    /// While profiling: each launch's kernel and the marks recorded around it.
+    profile: Option<Vec<(&'static str, Mark, Mark)>>,
+}
+
+/// Bytes of device memory, or of host memory on the emulated device.
+pub enum Buffer {
+    Device(CudaSlice<u8>),
+    Host(HostMemory),
+}
+
+/// Host memory that kernels on the emulated device write through raw pointers, as device
+/// memory is written: it is held by pointer, never borrowed for longer than one copy. In words,
+/// so that every element type is aligned.
+pub struct HostMemory {
+    words: *mut u64,
+    len: usize,
+}
+
+// SAFETY: the memory is owned; the run that owns the buffer is the only one to reach it.
+unsafe impl Send for HostMemory {}
+
+impl HostMemory {
+    fn zeroed(bytes: usize) -> Self {
+        let words: Box<[u64]> = vec![0; bytes.div_ceil(8).max(1)].into_boxed_slice();
+        let len = words.len();
+        Self { words: Box::into_raw(words).cast(), len }
+    }
+}
+
+impl Drop for HostMemory {
+    fn drop(&mut self) {
+        // SAFETY: `words` came from `Box::into_raw` of `len` words, and is dropped once.
+        drop(unsafe { Box::from_raw(std::ptr::slice_from_raw_parts_mut(self.words, self.len)) });
+    }
+}
+
+/// A point in a stream's work, for timing: an event on a device, an instant on the emulated
+/// one, whose launches return when they are done.
+pub enum Mark {
+    Event(CudaEvent),
+    Instant(Instant),
 }
 
 /// GPU time of one kernel over a profiled stretch.
@@ -112,30 +170,47 @@ impl Gpu {
         let stream = ctx.default_stream();
         let module = ctx.load_module(Ptx::from_src(PTX)).map_err(CudaError::PtxLoad)?;
         let sync_each_launch = std::env::var("COIL_CUDA_SYNC").is_ok_and(|v| v == "1");
-        Ok(Self { ctx, stream, module, functions: HashMap::new(), sync_each_launch, last_kernel: "(none)", profile: None })
+        let device = Device { ctx, stream, module, functions: HashMap::new() };
+        Ok(Self { engine: Engine::Cuda(device), sync_each_launch, last_kernel: "(none)", profile: None })
+    }
+
+    /// A device emulated on the host, for testing the backend where no GPU is: every launch
+    /// runs the kernels' host builds over all threads of its grid, in parallel and in no
+    /// particular order, as a device would.
+    pub fn emulated() -> Self {
+        Self { engine: Engine::Emulated, sync_each_launch: false, last_kernel: "(none)", profile: None }
     }
 
     /// The device's name and compute capability, for logs.
     pub fn describe(&self) -> String {
-        let name = self.ctx.name().unwrap_or_else(|_| "unknown device".into());
-        match self.ctx.compute_capability() {
+        let Engine::Cuda(d) = &self.engine else {
+            return format!("emulated on the CPU ({} threads)", rayon::current_num_threads());
+        };
+        let name = d.ctx.name().unwrap_or_else(|_| "unknown device".into());
+        match d.ctx.compute_capability() {
             Ok((major, minor)) => format!("{name} (sm_{major}{minor})"),
             Err(_) => name,
         }
     }
 
-    /// (free, total) bytes of device memory.
+    /// (free, total) bytes of device memory; none known on the emulated device.
     pub fn memory(&self) -> (usize, usize) {
-        self.ctx.mem_get_info().unwrap_or((0, 0))
+        match &self.engine {
+            Engine::Cuda(d) => d.ctx.mem_get_info().unwrap_or((0, 0)),
+            Engine::Emulated => (0, 0),
+        }
     }
 
-    /// A zeroed device array of `len` elements; `what` names it in an out-of-memory error.
-    pub fn zeros<T: DeviceRepr + ValidAsZeroBits>(&self, len: usize, what: &str) -> Result<CudaSlice<T>, CudaError> {
+    /// `bytes` zeroed bytes of device memory; `what` names them in an out-of-memory error.
+    pub fn zeros(&self, bytes: usize, what: &str) -> Result<Buffer, CudaError> {
+        let Engine::Cuda(d) = &self.engine else {
+            return Ok(Buffer::Host(HostMemory::zeroed(bytes)));
+        };
         // A zero-length allocation is an error in the driver.
-        self.stream.alloc_zeros::<T>(len.max(1)).map_err(|error| {
+        d.stream.alloc_zeros::<u8>(bytes.max(1)).map(Buffer::Device).map_err(|error| {
             if error.0 == sys::cudaError_enum::CUDA_ERROR_OUT_OF_MEMORY {
                 let (free, total) = self.memory();
-                CudaError::OutOfMemory { what: what.into(), bytes: len.max(1) * std::mem::size_of::<T>(), free, total }
+                CudaError::OutOfMemory { what: what.into(), bytes: bytes.max(1), free, total }
             } else {
                 CudaError::Driver { call: "cuMemAlloc", error }
             }
@@ -143,54 +218,105 @@ impl Gpu {
     }
 
     /// Copies `host` into the start of `device`.
-    pub fn upload<T: DeviceRepr>(&self, host: &[T], device: &mut CudaSlice<T>) -> Result<(), CudaError> {
+    pub fn upload(&self, host: &[u8], device: &mut Buffer) -> Result<(), CudaError> {
         if host.is_empty() {
             return Ok(());
         }
-        let mut target = device.slice_mut(..host.len());
-        self.stream.memcpy_htod(host, &mut target).map_err(|error| self.failed("cuMemcpyHtoD", error))
+        match (&self.engine, device) {
+            (Engine::Cuda(d), Buffer::Device(slice)) => {
+                let mut target = slice.slice_mut(..host.len());
+                d.stream.memcpy_htod(host, &mut target).map_err(|error| self.failed("cuMemcpyHtoD", error))
+            }
+            (_, device) => {
+                device.host_bytes_mut()[..host.len()].copy_from_slice(host);
+                Ok(())
+            }
+        }
     }
 
-    /// Copies the first `host.len()` elements of `device` into `host` (waits for the stream).
-    pub fn download<T: DeviceRepr>(&self, device: &CudaSlice<T>, host: &mut [T]) -> Result<(), CudaError> {
+    /// Copies the first `host.len()` bytes of `device` into `host` (waits for the stream).
+    pub fn download(&self, device: &Buffer, host: &mut [u8]) -> Result<(), CudaError> {
         if host.is_empty() {
             return Ok(());
         }
-        self.stream.memcpy_dtoh(&device.slice(..host.len()), host).map_err(|error| self.failed("cuMemcpyDtoH", error))
+        match (&self.engine, device) {
+            (Engine::Cuda(d), Buffer::Device(slice)) => {
+                d.stream.memcpy_dtoh(&slice.slice(..host.len()), host).map_err(|error| self.failed("cuMemcpyDtoH", error))
+            }
+            (_, device) => {
+                host.copy_from_slice(&device.host_bytes()[..host.len()]);
+                Ok(())
+            }
+        }
     }
 
     /// Zeroes `device`.
-    pub fn clear<T: DeviceRepr + ValidAsZeroBits>(&self, device: &mut CudaSlice<T>) -> Result<(), CudaError> {
-        self.stream.memset_zeros(device).map_err(|error| self.failed("cuMemsetD8", error))
+    pub fn clear(&self, device: &mut Buffer) -> Result<(), CudaError> {
+        match (&self.engine, device) {
+            (Engine::Cuda(d), Buffer::Device(slice)) => {
+                d.stream.memset_zeros(slice).map_err(|error| self.failed("cuMemsetD8", error))
+            }
+            (_, device) => {
+                device.host_bytes_mut().fill(0);
+                Ok(())
+            }
+        }
+    }
+
+    /// Copies all of `source` into `target`, of the same size.
+    fn copy(&self, source: &Buffer, target: &mut Buffer) -> Result<(), CudaError> {
+        match (&self.engine, source, target) {
+            (Engine::Cuda(d), Buffer::Device(s), Buffer::Device(t)) => {
+                d.stream.memcpy_dtod(s, t).map_err(|error| self.failed("cuMemcpyDtoD", error))
+            }
+            (_, source, target) => {
+                target.host_bytes_mut().copy_from_slice(source.host_bytes());
+                Ok(())
+            }
+        }
     }
 
     /// Waits for all queued work.
     pub fn synchronize(&self) -> Result<(), CudaError> {
-        self.stream.synchronize().map_err(|error| self.failed("cuStreamSynchronize", error))
+        match &self.engine {
+            Engine::Cuda(d) => d.stream.synchronize().map_err(|error| self.failed("cuStreamSynchronize", error)),
+            Engine::Emulated => Ok(()),
+        }
     }
 
-    /// A timing event recorded now on the stream.
-    pub fn mark(&self) -> Result<CudaEvent, CudaError> {
-        self.stream
-            .record_event(Some(sys::CUevent_flags::CU_EVENT_DEFAULT))
-            .map_err(|error| CudaError::Driver { call: "cuEventRecord", error })
+    /// A timing mark recorded now on the stream.
+    pub fn mark(&self) -> Result<Mark, CudaError> {
+        match &self.engine {
+            Engine::Cuda(d) => d
+                .stream
+                .record_event(Some(sys::CUevent_flags::CU_EVENT_DEFAULT))
+                .map(Mark::Event)
+                .map_err(|error| CudaError::Driver { call: "cuEventRecord", error }),
+            Engine::Emulated => Ok(Mark::Instant(Instant::now())),
+        }
     }
 
-    /// Milliseconds of GPU time between two events from `mark` (waits for `end`).
-    pub fn elapsed_ms(&self, start: &CudaEvent, end: &CudaEvent) -> Result<f64, CudaError> {
-        start.elapsed_ms(end).map(f64::from).map_err(|error| self.failed("cuEventElapsedTime", error))
+    /// Milliseconds of GPU time between two marks from `mark` (waits for `end`).
+    pub fn elapsed_ms(&self, start: &Mark, end: &Mark) -> Result<f64, CudaError> {
+        match (start, end) {
+            (Mark::Event(start), Mark::Event(end)) => {
+                start.elapsed_ms(end).map(f64::from).map_err(|error| self.failed("cuEventElapsedTime", error))
+            }
+            (Mark::Instant(start), Mark::Instant(end)) => Ok(end.duration_since(*start).as_secs_f64() * 1e3),
+            _ => unreachable!("marks of one device are of one kind"),
+        }
     }
 
     /// Device-to-device copy bandwidth (bytes/s, read plus write): the median of 5 copies of
     /// 256 MiB, or of a quarter of free memory where that is less.
     pub fn copy_bandwidth(&self) -> Result<f64, CudaError> {
         let bytes = (256usize << 20).min(self.memory().0 / 4).max(1 << 20);
-        let source = self.zeros::<u8>(bytes, "bandwidth probe")?;
-        let mut target = self.zeros::<u8>(bytes, "bandwidth probe")?;
+        let source = self.zeros(bytes, "bandwidth probe")?;
+        let mut target = self.zeros(bytes, "bandwidth probe")?;
         let mut rates = Vec::new();
         for _ in 0..5 {
             let start = self.mark()?;
-            self.stream.memcpy_dtod(&source, &mut target).map_err(|error| self.failed("cuMemcpyDtoD", error))?;
+            self.copy(&source, &mut target)?;
             let end = self.mark()?;
             rates.push(2.0 * bytes as f64 / (self.elapsed_ms(&start, &end)? * 1e-3));
         }
@@ -221,10 +347,13 @@ impl Gpu {
         Ok(times)
     }
 
-    /// The device address of `slice`, for the views inside kernel arguments.
-    pub fn address<T>(&self, slice: &CudaSlice<T>) -> u64 {
-        let (ptr, _sync) = slice.device_ptr(&self.stream);
-        ptr
+    /// The device address of `buffer`, for the views inside kernel arguments.
+    pub fn address(&self, buffer: &Buffer) -> u64 {
+        match (&self.engine, buffer) {
+            (Engine::Cuda(d), Buffer::Device(slice)) => slice.device_ptr(&d.stream).0,
+            (_, Buffer::Host(memory)) => memory.words as u64,
+            (Engine::Emulated, Buffer::Device(_)) => unreachable!("a device buffer on the emulated device"),
+        }
     }
 
     /// Launches kernel `name` with `threads` threads and the given by-value arguments.
@@ -236,25 +365,36 @@ impl Gpu {
         if threads == 0 {
             return Ok(());
         }
-        if !self.functions.contains_key(name) {
-            let f = self.module.load_function(name).map_err(|_| CudaError::MissingKernel(name.into()))?;
-            self.functions.insert(name.into(), f);
-        }
-        let f = &self.functions[name];
-        let mut builder = self.stream.launch_builder(f);
-        for a in args {
-            a.push(&mut builder);
-        }
-        let cfg = LaunchConfig { grid_dim: (threads.div_ceil(BLOCK), 1, 1), block_dim: (BLOCK, 1, 1), shared_mem_bytes: 0 };
+        let blocks = threads.div_ceil(BLOCK);
         self.last_kernel = name;
         let start = if self.profile.is_some() { Some(self.mark()?) } else { None };
-        builder.launch(cfg).map_err(|error| CudaError::Launch { kernel: name.into(), error })?;
+        match &mut self.engine {
+            Engine::Cuda(d) => {
+                if !d.functions.contains_key(name) {
+                    let f = d.module.load_function(name).map_err(|_| CudaError::MissingKernel(name.into()))?;
+                    d.functions.insert(name.into(), f);
+                }
+                let mut builder = d.stream.launch_builder(&d.functions[name]);
+                for a in args {
+                    a.push(&mut builder);
+                }
+                let cfg = LaunchConfig { grid_dim: (blocks, 1, 1), block_dim: (BLOCK, 1, 1), shared_mem_bytes: 0 };
+                builder.launch(cfg).map_err(|error| CudaError::Launch { kernel: name.into(), error })?;
+                if self.sync_each_launch {
+                    d.stream.synchronize().map_err(|error| CudaError::Launch { kernel: name.into(), error })?;
+                }
+            }
+            Engine::Emulated => {
+                let entry: Emulated =
+                    ENTRIES.iter().find(|(n, _)| *n == name).ok_or_else(|| CudaError::MissingKernel(name.into()))?.1;
+                let params: Vec<Param> = args.iter().map(|a| a.param()).collect();
+                // SAFETY: as for the device: the caller vouches for the arguments and views.
+                (0..(blocks * BLOCK) as usize).into_par_iter().for_each(|i| unsafe { entry(i, &params) });
+            }
+        }
         if let Some(start) = start {
             let end = self.mark()?;
             self.profile.get_or_insert_with(Vec::new).push((name, start, end));
-        }
-        if self.sync_each_launch {
-            self.stream.synchronize().map_err(|error| CudaError::Launch { kernel: name.into(), error })?;
         }
         Ok(())
     }
@@ -273,13 +413,40 @@ impl Gpu {
     }
 }
 
+impl Buffer {
+    /// The bytes of host memory, for one copy: no launch runs meanwhile, since the emulated
+    /// device's launches return when their threads are done.
+    fn host_bytes(&self) -> &[u8] {
+        match self {
+            // SAFETY: `len` initialised words, owned by `self`.
+            Buffer::Host(m) => unsafe { std::slice::from_raw_parts(m.words.cast(), m.len * 8) },
+            Buffer::Device(_) => unreachable!("a device buffer on the emulated device"),
+        }
+    }
+
+    fn host_bytes_mut(&mut self) -> &mut [u8] {
+        match self {
+            // SAFETY: as above, and `&mut self` excludes every other copy.
+            Buffer::Host(m) => unsafe { std::slice::from_raw_parts_mut(m.words.cast(), m.len * 8) },
+            Buffer::Device(_) => unreachable!("a device buffer on the emulated device"),
+        }
+    }
+}
+
 /// One kernel argument of [`Gpu::launch`].
 pub trait Arg {
     fn push<'a>(&'a self, builder: &mut cudarc::driver::LaunchArgs<'a>);
+    /// The argument as the emulated device passes it; it lives as long as `self`.
+    fn param(&self) -> Param;
 }
 
 impl<T: Copy> Arg for ByValue<T> {
     fn push<'a>(&'a self, builder: &mut cudarc::driver::LaunchArgs<'a>) {
         builder.arg(self);
+    }
+
+    fn param(&self) -> Param {
+        // SAFETY: the launch that reads it returns before `self` can go.
+        unsafe { Param::new(&self.0) }
     }
 }

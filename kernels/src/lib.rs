@@ -43,7 +43,6 @@ pub mod vec3;
 pub mod velocity_gradient;
 pub mod view;
 
-#[cfg(target_arch = "nvptx64")]
 pub mod ptx;
 
 pub use real::Real;

@@ -5,6 +5,11 @@
 //! Per-particle kernels read the particle count from device memory (`count`), because the
 //! sort drops particles that left the domain on the device: the host launches enough threads
 //! for an upper bound and never waits for the count inside a step.
+//!
+//! Off the device the same entries compile to plain functions of a thread index and their
+//! parameters' bytes, listed by name in [`ENTRIES`]: the host's emulated device
+//! (`coil::cuda::Gpu::emulated`) launches them, so the CUDA backend's host side, every launch,
+//! argument and buffer of it, runs and is tested where no GPU is.
 
 use crate::acceleration::{acceleration_pass, AccelerationArgs, MorrisViscosity, StressDivergence, VelocityLaplacian};
 use crate::cell_grid::{hash_pass, HashArgs};
@@ -20,30 +25,99 @@ use crate::shear_viscosity::{shear_viscosity_pass, ShearViscosityArgs};
 use crate::topology::{Open, Periodic};
 use crate::velocity_gradient::{stress_pass, StressArgs};
 use crate::view::{View, ViewMut};
-use core::arch::nvptx;
 
+#[cfg(target_arch = "nvptx64")]
 #[panic_handler]
 fn panic(_: &core::panic::PanicInfo) -> ! {
     // SAFETY: `trap` aborts the kernel; the host sees a launch failure.
-    unsafe { nvptx::trap() }
+    unsafe { core::arch::nvptx::trap() }
 }
 
 /// This thread's index in a 1-D launch.
+#[cfg(target_arch = "nvptx64")]
 #[inline(always)]
 fn thread_index() -> usize {
+    use core::arch::nvptx;
     // SAFETY: reading special registers has no side effects.
     unsafe { (nvptx::_block_idx_x() as usize) * (nvptx::_block_dim_x() as usize) + nvptx::_thread_idx_x() as usize }
 }
 
+/// One parameter of an emulated launch: the address and size of the value the host passes,
+/// as the driver receives a kernel's parameters.
+#[cfg(not(target_arch = "nvptx64"))]
+#[derive(Clone, Copy, Debug)]
+pub struct Param {
+    value: *const u8,
+    size: usize,
+}
+
+// SAFETY: a parameter is read, never written, by every thread of its launch.
+#[cfg(not(target_arch = "nvptx64"))]
+unsafe impl Send for Param {}
+#[cfg(not(target_arch = "nvptx64"))]
+unsafe impl Sync for Param {}
+
+#[cfg(not(target_arch = "nvptx64"))]
+impl Param {
+    /// # Safety
+    /// `value` must outlive every launch that reads the parameter.
+    pub unsafe fn new<T: Copy>(value: &T) -> Self {
+        Self { value: (value as *const T).cast(), size: core::mem::size_of::<T>() }
+    }
+
+    /// The value as the entry's parameter type, whose size it must have.
+    ///
+    /// # Safety
+    /// The value must be a `T`, as a PTX entry trusts its parameters to be.
+    unsafe fn read<T: Copy>(self, entry: &str) -> T {
+        assert!(
+            self.size == core::mem::size_of::<T>(),
+            "{entry}: a parameter of {} bytes where the entry takes {}",
+            self.size,
+            core::mem::size_of::<T>()
+        );
+        core::ptr::read_unaligned(self.value.cast())
+    }
+}
+
+/// An entry as the host runs it: one thread of a launch, given its index and the parameters.
+#[cfg(not(target_arch = "nvptx64"))]
+pub type Emulated = unsafe fn(usize, &[Param]);
+
+/// A PTX entry `$name` whose thread `$i` runs `$body`: on the device an `extern "ptx-kernel"`
+/// function, on the host an [`Emulated`] one that reads its parameters from their bytes.
+macro_rules! entry {
+    ($name:ident($i:ident; $($p:ident: $t:ty),+) $body:block) => {
+        #[cfg(target_arch = "nvptx64")]
+        #[no_mangle]
+        pub unsafe extern "ptx-kernel" fn $name($($p: $t),+) {
+            let $i = thread_index();
+            $body
+        }
+
+        /// The entry's thread `i` on the host.
+        ///
+        /// # Safety
+        /// `params` must be the entry's parameters, and every view in them must cover live
+        /// memory of the length it claims, as on the device.
+        #[cfg(not(target_arch = "nvptx64"))]
+        pub unsafe fn $name($i: usize, params: &[Param]) {
+            let expected = [$(stringify!($p)),+].len();
+            assert!(params.len() == expected, "{}: {} parameters where the entry takes {expected}", stringify!($name), params.len());
+            let mut params = params.iter();
+            $(let $p: $t = params.next().expect("counted").read(stringify!($name));)+
+            $body
+        }
+    };
+}
+
 macro_rules! per_index_kernel {
     ($name:ident, $args:ty, $pass:expr) => {
-        #[no_mangle]
-        pub unsafe extern "ptx-kernel" fn $name(count: View<'static, u32>, args: $args) {
-            let i = thread_index();
+        entry!($name(i; count: View<'static, u32>, args: $args) {
             if i < count.at(0) as usize {
                 $pass(i, &args);
             }
-        }
+        });
     };
 }
 
@@ -178,87 +252,55 @@ per_index_kernel!(nozzle_f64, NozzleArgs<'static, f64>, nozzle_pass::<f64>);
 per_topology_kernels!(leapfrog_f32, leapfrog_periodic_f32, LeapfrogArgs<f32>, leapfrog_pass<f32>);
 per_topology_kernels!(leapfrog_f64, leapfrog_periodic_f64, LeapfrogArgs<f64>, leapfrog_pass<f64>);
 
-#[no_mangle]
-pub unsafe extern "ptx-kernel" fn count_particles(
-    count: View<'static, u32>,
-    cell_key: View<'static, u32>,
-    counts: Counters<'static>,
-) {
-    let i = thread_index();
+entry!(count_particles(i; count: View<'static, u32>, cell_key: View<'static, u32>, counts: Counters<'static>) {
     if i < count.at(0) as usize {
         count_particle(i, cell_key, counts);
     }
-}
+});
 
-#[no_mangle]
-pub unsafe extern "ptx-kernel" fn scan_chunk_totals(
-    chunks: u32,
-    chunk_len: u32,
-    counts: Counters<'static>,
-    totals: ViewMut<'static, u32>,
-) {
-    let c = thread_index();
+entry!(scan_chunk_totals(c; chunks: u32, chunk_len: u32, counts: Counters<'static>, totals: ViewMut<'static, u32>) {
     if c < chunks as usize {
         totals.write(c, chunk_total(c, chunk_len as usize, counts));
     }
-}
+});
 
-#[no_mangle]
-pub unsafe extern "ptx-kernel" fn scan_offsets(totals: ViewMut<'static, u32>) {
-    if thread_index() == 0 {
+entry!(scan_offsets(t; totals: ViewMut<'static, u32>) {
+    if t == 0 {
         scan_chunk_offsets(totals);
     }
-}
+});
 
-#[no_mangle]
-pub unsafe extern "ptx-kernel" fn scan_chunks(
+entry!(scan_chunks(c;
     chunks: u32,
     chunk_len: u32,
     chunk_offsets: View<'static, u32>,
     counts: Counters<'static>,
-    bucket_start: ViewMut<'static, u32>,
+    bucket_start: ViewMut<'static, u32>
 ) {
-    let c = thread_index();
     if c < chunks as usize {
         scan_chunk(c, chunk_len as usize, chunk_offsets.at(c), counts, bucket_start);
     }
-}
+});
 
-#[no_mangle]
-pub unsafe extern "ptx-kernel" fn scatter_particles(
-    count: View<'static, u32>,
-    cell_key: View<'static, u32>,
-    cursor: Counters<'static>,
-    order: ViewMut<'static, u32>,
-) {
-    let i = thread_index();
+entry!(scatter_particles(i; count: View<'static, u32>, cell_key: View<'static, u32>, cursor: Counters<'static>, order: ViewMut<'static, u32>) {
     if i < count.at(0) as usize {
         scatter(i, cell_key, cursor, order);
     }
-}
+});
 
-#[no_mangle]
-pub unsafe extern "ptx-kernel" fn sort_buckets(buckets: u32, bucket_start: View<'static, u32>, order: ViewMut<'static, u32>) {
-    let c = thread_index();
+entry!(sort_buckets(c; buckets: u32, bucket_start: View<'static, u32>, order: ViewMut<'static, u32>) {
     if c < buckets as usize {
         sort_bucket(c, bucket_start, order);
     }
-}
+});
 
 macro_rules! gather_kernel {
     ($name:ident, $t:ty) => {
-        #[no_mangle]
-        pub unsafe extern "ptx-kernel" fn $name(
-            count: View<'static, u32>,
-            order: View<'static, u32>,
-            unsorted: View<'static, $t>,
-            sorted: ViewMut<'static, $t>,
-        ) {
-            let k = thread_index();
+        entry!($name(k; count: View<'static, u32>, order: View<'static, u32>, unsorted: View<'static, $t>, sorted: ViewMut<'static, $t>) {
             if k < count.at(0) as usize {
                 gather(k, order, unsorted, sorted);
             }
-        }
+        });
     };
 }
 
@@ -266,37 +308,28 @@ gather_kernel!(gather_u32, u32);
 gather_kernel!(gather_f32, f32);
 gather_kernel!(gather_f64, f64);
 
-/// After the sort: the live count is the start of the bucket of particles outside the domain.
-#[no_mangle]
-pub unsafe extern "ptx-kernel" fn set_count(count: ViewMut<'static, u32>, bucket_start: View<'static, u32>, cells: u32) {
-    if thread_index() == 0 {
+// After the sort: the live count is the start of the bucket of particles outside the domain.
+entry!(set_count(t; count: ViewMut<'static, u32>, bucket_start: View<'static, u32>, cells: u32) {
+    if t == 0 {
         count.write(0, bucket_start.at(cells as usize));
     }
-}
+});
 
-/// After new inlet particles were appended behind the live ones.
-#[no_mangle]
-pub unsafe extern "ptx-kernel" fn grow_count(count: ViewMut<'static, u32>, added: u32) {
-    if thread_index() == 0 {
+// After new inlet particles were appended behind the live ones.
+entry!(grow_count(t; count: ViewMut<'static, u32>, added: u32) {
+    if t == 0 {
         count.write(0, count.at(0) + added);
     }
-}
+});
 
+/// Copies `added` staged inlet particles' values behind the `count` live ones.
 macro_rules! append_kernel {
     ($name:ident, $t:ty) => {
-        /// Copies `added` staged inlet particles' values behind the `count` live ones.
-        #[no_mangle]
-        pub unsafe extern "ptx-kernel" fn $name(
-            count: View<'static, u32>,
-            added: u32,
-            staged: View<'static, $t>,
-            field: ViewMut<'static, $t>,
-        ) {
-            let j = thread_index();
+        entry!($name(j; count: View<'static, u32>, added: u32, staged: View<'static, $t>, field: ViewMut<'static, $t>) {
             if j < added as usize {
                 field.write(count.at(0) as usize + j, staged.at(j));
             }
-        }
+        });
     };
 }
 
@@ -306,21 +339,106 @@ append_kernel!(append_f64, f64);
 
 macro_rules! diagnostics_kernel {
     ($name:ident, $t:ty) => {
-        #[no_mangle]
-        pub unsafe extern "ptx-kernel" fn $name(
+        entry!($name(r;
             count: View<'static, u32>,
             range_len: u32,
             args: DiagnosticsArgs<'static, $t>,
-            out: ViewMut<'static, StateFigures>,
+            out: ViewMut<'static, StateFigures>
         ) {
             let n = count.at(0) as usize;
-            let r = thread_index();
             if r * (range_len as usize) < n {
                 diagnostics_pass(r, range_len as usize, n, &args, out);
             }
-        }
+        });
     };
 }
 
 diagnostics_kernel!(diagnostics_f32, f32);
 diagnostics_kernel!(diagnostics_f64, f64);
+
+/// Every entry by its PTX name, for the host's emulated device.
+#[cfg(not(target_arch = "nvptx64"))]
+pub const ENTRIES: &[(&str, Emulated)] = {
+    macro_rules! by_name {
+        ($($name:ident),+ $(,)?) => {
+            &[$((stringify!($name), $name as Emulated)),+]
+        };
+    }
+    by_name![
+        hash,
+        density_f32,
+        density_periodic_f32,
+        density_f64,
+        density_periodic_f64,
+        density_spiky_f32,
+        density_spiky_periodic_f32,
+        density_spiky_f64,
+        density_spiky_periodic_f64,
+        mirrored_wall_f32,
+        mirrored_wall_periodic_f32,
+        mirrored_wall_f64,
+        mirrored_wall_periodic_f64,
+        stress_newtonian_f32,
+        stress_newtonian_periodic_f32,
+        stress_newtonian_f64,
+        stress_newtonian_periodic_f64,
+        stress_cross_f32,
+        stress_cross_periodic_f32,
+        stress_cross_f64,
+        stress_cross_periodic_f64,
+        acceleration_stress_f32,
+        acceleration_stress_periodic_f32,
+        acceleration_stress_f64,
+        acceleration_stress_periodic_f64,
+        acceleration_laplacian_f32,
+        acceleration_laplacian_periodic_f32,
+        acceleration_laplacian_f64,
+        acceleration_laplacian_periodic_f64,
+        shear_viscosity_cross_f32,
+        shear_viscosity_cross_periodic_f32,
+        shear_viscosity_cross_f64,
+        shear_viscosity_cross_periodic_f64,
+        acceleration_morris_f32,
+        acceleration_morris_periodic_f32,
+        acceleration_morris_f64,
+        acceleration_morris_periodic_f64,
+        acceleration_morris_shear_f32,
+        acceleration_morris_shear_periodic_f32,
+        acceleration_morris_shear_f64,
+        acceleration_morris_shear_periodic_f64,
+        velocity_gradient_newtonian_f32,
+        velocity_gradient_newtonian_periodic_f32,
+        velocity_gradient_newtonian_f64,
+        velocity_gradient_newtonian_periodic_f64,
+        velocity_gradient_cross_f32,
+        velocity_gradient_cross_periodic_f32,
+        velocity_gradient_cross_f64,
+        velocity_gradient_cross_periodic_f64,
+        acceleration_hourglass_f32,
+        acceleration_hourglass_periodic_f32,
+        acceleration_hourglass_f64,
+        acceleration_hourglass_periodic_f64,
+        nozzle_f32,
+        nozzle_f64,
+        leapfrog_f32,
+        leapfrog_periodic_f32,
+        leapfrog_f64,
+        leapfrog_periodic_f64,
+        count_particles,
+        scan_chunk_totals,
+        scan_offsets,
+        scan_chunks,
+        scatter_particles,
+        sort_buckets,
+        gather_u32,
+        gather_f32,
+        gather_f64,
+        set_count,
+        grow_count,
+        append_u32,
+        append_f32,
+        append_f64,
+        diagnostics_f32,
+        diagnostics_f64,
+    ]
+};
