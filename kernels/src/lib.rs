@@ -43,6 +43,7 @@ pub mod vec3;
 pub mod velocity_gradient;
 pub mod view;
 
+#[cfg(any(target_arch = "nvptx64", feature = "host-entries"))]
 pub mod ptx;
 
 pub use real::Real;
