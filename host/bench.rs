@@ -164,10 +164,10 @@ struct Measure<'a> {
 }
 
 #[cfg(feature = "cuda")]
-type Device = crate::cuda::Gpu;
+pub type Device = crate::cuda::Gpu;
 /// This build has no CUDA backend: no device can exist.
 #[cfg(not(feature = "cuda"))]
-enum Device {}
+pub enum Device {}
 
 impl WithModel for Measure<'_> {
     type Output = (Result<Measurement, String>, Option<Device>);
@@ -314,8 +314,20 @@ fn describe_cpu() -> String {
 
 /// Runs every configuration of `options`, smallest first. A GPU is opened once when asked for;
 /// without one a `cuda` measurement is an error that names why.
-pub fn bench(options: &BenchOptions, mut progress: impl FnMut(&Measurement)) -> Result<BenchReport, String> {
-    let mut gpu = open_gpu(options)?;
+pub fn bench(options: &BenchOptions, progress: impl FnMut(&Measurement)) -> Result<BenchReport, String> {
+    bench_on(open_gpu(options)?, options, progress)
+}
+
+/// [`bench`] on a device already opened (the emulated one, in tests), which the `cuda`
+/// measurements need.
+pub fn bench_on(
+    mut gpu: Option<Device>,
+    options: &BenchOptions,
+    mut progress: impl FnMut(&Measurement),
+) -> Result<BenchReport, String> {
+    if gpu.is_none() && options.backends.contains(&BenchBackend::Cuda) {
+        return Err("--backend cuda: no device was opened".into());
+    }
     let gpu_name = describe_gpu(&gpu);
     let gpu_bandwidth = copy_bandwidth(&gpu)?;
     let mut measurements = Vec::new();

@@ -447,3 +447,49 @@ fn periodic_channels_on_the_gpu_agree_with_the_cpu() {
         assert!(paper <= tolerance && thinning <= tolerance, "{engine:?}: positions differ by {paper:.3e} / {thinning:.3e} m");
     }
 }
+
+/// `coil bench`'s GPU path on the emulated device: a step's launches as the profile counts
+/// them, device bytes per particle, the memory floor, and the report's kernel section. The
+/// times are the host's and mean nothing for a GPU; the bookkeeping is what is tested.
+#[test]
+fn the_bench_profiles_every_launch_of_a_gpu_step() {
+    use coil::bench::{bench_on, precision_name, BenchBackend, BenchOptions, TABLE_I};
+    use coil::scene::Precision;
+    let options = BenchOptions {
+        sizes: vec![TABLE_I[0]],
+        precisions: vec![Precision::F32, Precision::F64],
+        backends: vec![BenchBackend::Cpu, BenchBackend::Cuda],
+        steps: 4,
+        cpu_large_steps: 4,
+        warmup: 1,
+        profile_steps: 2,
+    };
+    let report = bench_on(Some(Gpu::emulated()), &options, |_| {}).expect("the bench runs");
+    assert_eq!(report.measurements.len(), 4, "two precisions on two backends");
+    for pair in report.measurements.chunks(2) {
+        let (cpu, m) = (&pair[0], &pair[1]);
+        assert_eq!((cpu.backend, m.backend), (BenchBackend::Cpu, BenchBackend::Cuda));
+        assert_eq!((m.fluid, m.boundary), (cpu.fluid, cpu.boundary), "the same dam break on both");
+        let r = precision_name(m.precision);
+        let launches = |k: &str| m.kernels.iter().find(|s| s.kernel == k).map_or(0.0, |s| s.launches_per_step);
+        // The dam break is the paper's operator with the Cross model: one of each pass a step.
+        for k in ["hash", "count_particles", "scan_offsets", "scatter_particles", "sort_buckets", "gather_u32"] {
+            assert_eq!(launches(k), 1.0, "{r}: {k}");
+        }
+        for stem in ["density", "stress_cross", "acceleration_stress", "leapfrog"] {
+            assert_eq!(launches(&format!("{stem}_{r}")), 1.0, "{r}: {stem}");
+        }
+        // Positions are f64 in both precisions; the two velocities are reordered in R, per axis.
+        let (f64_gathers, real_gathers) = if r == "f32" { (3.0, 6.0) } else { (9.0, 9.0) };
+        assert_eq!(launches("gather_f64"), f64_gathers, "{r}: gather_f64");
+        assert_eq!(launches(&format!("gather_{r}")), real_gathers, "{r}: gather_{r}");
+        // Every particle holds at least its position (24 bytes), id (4), velocity, half-step
+        // velocity, acceleration, density and stress (16 numbers of R).
+        let real = if r == "f32" { 4.0 } else { 8.0 };
+        let state = (28.0 + 16.0 * real) * (m.fluid + m.boundary) as f64 / m.fluid as f64;
+        assert!(m.bytes_per_fluid_particle >= state, "{r}: {} bytes per particle", m.bytes_per_fluid_particle);
+        assert!(m.memory_floor_ms.is_some_and(|f| f > 0.0), "{r}: a floor from the measured copy bandwidth");
+    }
+    let md = coil::bench_report::markdown(&report, &options);
+    assert!(md.contains("## GPU kernels at 1K"), "{md}");
+}
