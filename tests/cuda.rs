@@ -8,7 +8,7 @@
 
 mod common;
 
-use coil::cuda::device_array::{vec3_view, DeviceArray};
+use coil::cuda::device_array::{vec3_view, vec3_view_mut, DeviceArray};
 use coil::cuda::gpu::{ByValue, PTX};
 use coil::cuda::{Gpu, GpuSimulation};
 use coil::model::{cross_law, HourglassStressModel, LaplacianModel, Model, MorrisModel, ShearThinningMorrisModel, StressModel};
@@ -520,15 +520,14 @@ fn to_host<T: Copy + Default>(gpu: &Gpu, a: &DeviceArray<T>, len: usize) -> Vec<
     host
 }
 
-/// Each stage of the sort and the density, launched alone on random particles, against what
-/// the stage is defined to give on the CPU: the cell key of each particle from the same `hash`
-/// function, its histogram, the exclusive scan of that (in chunks of 16 buckets, so the scan
-/// crosses chunks), the stable order by key, the reorder and the live count; then the density
-/// pass against the same function run on the CPU. 4000 particles over a 8 x 6 x 5 grid of
-/// 0.1 m cells (about 17 to a cell, some cells nearly empty) and its margins, so that about a
-/// tenth fall outside and must sort last. The integer stages are integer arithmetic and must
-/// agree exactly on any device; the density to 1e-12 relative in f64 on a GPU (fused
-/// multiply-adds in sums of ~40 terms), and to the bit on the emulated device.
+/// Each stage of a step, launched alone on random particles, against the CPU: the cell key of
+/// each particle from the same `hash` function, its histogram, the exclusive scan of that (in
+/// chunks of 16 buckets, so the scan crosses chunks), the stable order by key, the reorder and
+/// the live count, which are what those stages are defined to give; then the density, stress
+/// and acceleration passes against the same functions run on the CPU. 4000 particles over a
+/// 8 x 6 x 5 grid of 0.1 m cells (about 17 to a cell, some cells nearly empty) and its margins,
+/// so that about a tenth fall outside and must sort last. The integer stages must agree
+/// exactly on any device; the float passes as `random_stages` says.
 #[test]
 fn each_stage_on_random_particles_matches_the_cpu() {
     for engine in engines() {
@@ -539,9 +538,11 @@ fn each_stage_on_random_particles_matches_the_cpu() {
 }
 
 fn random_stages(engine: Engine, seed: u64) {
+    use coil_kernels::acceleration::acceleration_pass;
     use coil_kernels::cell_grid::{hash, CellGrid, Neighborhood};
     use coil_kernels::density::{density_pass, Poly6};
-    use coil_kernels::view::{Vec3View, ViewMut};
+    use coil_kernels::velocity_gradient::stress_pass;
+    use coil_kernels::view::{SymTensorViewMut, Vec3View, Vec3ViewMut, ViewMut};
     let mut gpu = engine.open();
     let grid = CellGrid { origin: [0.0; 3], inverse_cell_size: [10.0; 3], dims: [8, 6, 5] };
     let (n, cells) = (4000usize, grid.cell_count() as usize);
@@ -613,43 +614,123 @@ fn random_stages(engine: Engine, seed: u64) {
         assert!(to_host(&gpu, &sorted_x, live) == gathered, "{engine:?}, seed {seed}: reorder");
     }
 
-    // The density of the live particles, sorted, with the dam break's constants (h = 0.08 m,
-    // within the 0.1 m cells).
+    // The float passes over the live particles, sorted, with the dam break's constants (h =
+    // 0.08 m, within the 0.1 m cells, the Cross law) and random velocities up to 0.5 m/s; a
+    // quarter of them (ids below n / 4) are wall particles, whose acceleration is zero.
     let scene = dam_break();
     let initial = initial_particles(&scene, "dam_break.toml").expect("valid");
-    let fluid = Simulation::<f64, _>::new(&scene, &initial, cross::<f64>(&scene)).fluid;
+    let mut fluid = Simulation::<f64, _>::new(&scene, &initial, cross::<f64>(&scene)).fluid;
+    fluid.boundary_count = n as u32 / 4;
+    let rheology = cross_law::<f64>(&scene.material.viscosity);
     let sorted: [Vec<f64>; 3] = [0, 1, 2].map(|a| order[..live].iter().map(|&i| position[a][i as usize]).collect());
+    let velocity: [Vec<f64>; 3] = [0, 1, 2].map(|_| (0..live).map(|_| rng.next() - 0.5).collect());
+    let id = &order[..live];
     let mut density = vec![0f64; live];
-    let cpu_args = DensityArgs {
-        neighborhood: Neighborhood {
+    let mut stress: [Vec<f64>; 6] = std::array::from_fn(|_| vec![0f64; live]);
+    let mut acceleration: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0f64; live]);
+    {
+        let neighborhood = Neighborhood {
             grid,
             cell_start: View::new(&start),
             position: Vec3View::new(&sorted[0], &sorted[1], &sorted[2]),
             topology: Open,
-        },
-        fluid,
-        density: ViewMut::new(&mut density),
-    };
-    (0..live).for_each(|i| density_pass::<f64, Poly6, Open>(i, &cpu_args));
+        };
+        let density_args = DensityArgs { neighborhood, fluid, density: ViewMut::new(&mut density) };
+        (0..live).for_each(|i| density_pass::<f64, Poly6, Open>(i, &density_args));
+        let [xx, yy, zz, xy, xz, yz] = &mut stress;
+        let stress_view = SymTensorViewMut {
+            xx: ViewMut::new(xx),
+            yy: ViewMut::new(yy),
+            zz: ViewMut::new(zz),
+            xy: ViewMut::new(xy),
+            xz: ViewMut::new(xz),
+            yz: ViewMut::new(yz),
+        };
+        let stress_args = StressArgs {
+            neighborhood,
+            fluid,
+            rheology,
+            velocity: Vec3View::new(&velocity[0], &velocity[1], &velocity[2]),
+            density: View::new(&density),
+            stress: stress_view,
+        };
+        (0..live).for_each(|i| stress_pass::<f64, Cross<f64>, Open>(i, &stress_args));
+        let [ax, ay, az] = &mut acceleration;
+        let acceleration_args = AccelerationArgs {
+            neighborhood,
+            fluid,
+            viscous: StressDivergence { stress: stress_view.read() },
+            id: View::new(id),
+            density: View::new(&density),
+            acceleration: Vec3ViewMut::new(ax, ay, az),
+        };
+        (0..live).for_each(|i| acceleration_pass::<f64, StressDivergence<f64>, Open>(i, &acceleration_args));
+    }
+
     let sorted_on_device = sorted.each_ref().map(|p| on_device(&gpu, p));
+    let velocity_on_device = velocity.each_ref().map(|v| on_device(&gpu, v));
+    let id_on_device = on_device(&gpu, id);
     let device_density = on_device(&gpu, &vec![0f64; live]);
-    let args = DensityArgs {
-        neighborhood: Neighborhood {
-            grid,
-            cell_start: cell_start.view(buckets + 1),
-            position: vec3_view(&sorted_on_device, live),
-            topology: Open,
-        },
-        fluid,
-        density: device_density.view_mut(live),
+    let device_stress: [DeviceArray<f64>; 6] = std::array::from_fn(|_| on_device(&gpu, &vec![0f64; live]));
+    let device_acceleration: [DeviceArray<f64>; 3] = std::array::from_fn(|_| on_device(&gpu, &vec![0f64; live]));
+    let neighborhood = Neighborhood {
+        grid,
+        cell_start: cell_start.view(buckets + 1),
+        position: vec3_view(&sorted_on_device, live),
+        topology: Open,
     };
-    // SAFETY: density_f64(count, args), the count now the live one.
-    unsafe { gpu.launch("density_f64", live as u32, &[&c, &ByValue(args)]).expect("density") };
-    let relative = if engine == Engine::Emulated { 0.0 } else { 1e-12 };
-    for (i, (&on_cpu, on_gpu)) in density.iter().zip(to_host(&gpu, &device_density, live)).enumerate() {
-        assert!(
-            (on_cpu - on_gpu).abs() <= relative * on_cpu,
-            "{engine:?}, seed {seed}: density of particle {i}: CPU {on_cpu}, device {on_gpu}"
-        );
+    let [xx, yy, zz, xy, xz, yz] = &device_stress;
+    let stress_view = SymTensorViewMut {
+        xx: xx.view_mut(live),
+        yy: yy.view_mut(live),
+        zz: zz.view_mut(live),
+        xy: xy.view_mut(live),
+        xz: xz.view_mut(live),
+        yz: yz.view_mut(live),
+    };
+    let density_args = DensityArgs { neighborhood, fluid, density: device_density.view_mut(live) };
+    let stress_args = StressArgs {
+        neighborhood,
+        fluid,
+        rheology,
+        velocity: vec3_view(&velocity_on_device, live),
+        density: device_density.view(live),
+        stress: stress_view,
+    };
+    let acceleration_args = AccelerationArgs {
+        neighborhood,
+        fluid,
+        viscous: StressDivergence { stress: stress_view.read() },
+        id: id_on_device.view(live),
+        density: device_density.view(live),
+        acceleration: vec3_view_mut(&device_acceleration, live),
+    };
+    // SAFETY: each entry's (count, args), the count now the live one.
+    unsafe {
+        gpu.launch("density_f64", live as u32, &[&c, &ByValue(density_args)]).expect("density");
+        gpu.launch("stress_cross_f64", live as u32, &[&c, &ByValue(stress_args)]).expect("stress");
+        gpu.launch("acceleration_stress_f64", live as u32, &[&c, &ByValue(acceleration_args)]).expect("acceleration");
+    }
+    // Each value is a sum over ~40 neighbors; a GPU rounds each product-sum once instead of
+    // twice, which moves a sum by about 1e-16 of its largest terms. Against the largest value
+    // of the field, 1e-12 leaves four orders of room, while a missed or extra neighbor moves a
+    // value by a whole term. The emulated device runs the CPU's code and must match it exactly.
+    let tolerance = if engine == Engine::Emulated { 0.0 } else { 1e-12 };
+    let compare = |what: &str, cpu: &[f64], device: &DeviceArray<f64>| {
+        let scale = cpu.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(scale > 0.0, "{what}: all zero, the comparison would see nothing");
+        for (i, (&on_cpu, on_device)) in cpu.iter().zip(to_host(&gpu, device, live)).enumerate() {
+            assert!(
+                (on_cpu - on_device).abs() <= tolerance * scale,
+                "{engine:?}, seed {seed}: {what} of particle {i}: CPU {on_cpu}, device {on_device}"
+            );
+        }
+    };
+    compare("density", &density, &device_density);
+    for (k, name) in ["xx", "yy", "zz", "xy", "xz", "yz"].iter().enumerate() {
+        compare(&format!("stress {name}"), &stress[k], &device_stress[k]);
+    }
+    for (a, name) in ["x", "y", "z"].iter().enumerate() {
+        compare(&format!("acceleration {name}"), &acceleration[a], &device_acceleration[a]);
     }
 }
