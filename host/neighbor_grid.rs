@@ -5,7 +5,8 @@ use crate::parallel::launch;
 use crate::particles::{view_mut, Particles};
 use coil_kernels::cell_grid::{hash_pass, CellGrid, HashArgs, Neighborhood};
 use coil_kernels::counting_sort::{
-    chunk_total, count_particle, gather, scan_chunk, scan_chunk_offsets, scatter, sort_bucket, Counters,
+    chunk_total, count_particle, gather, scan_by_levels, scan_chunk, scan_chunk_in_place, scan_chunk_offsets, scan_levels_len,
+    scatter, sort_bucket, sum_chunk, Counters, ScanStep,
 };
 use coil_kernels::topology::{Periodic, Topology};
 use coil_kernels::view::{Vec3View, View, ViewMut};
@@ -23,7 +24,9 @@ pub struct NeighborGrid {
     counters: Vec<AtomicU32>,
     cell_start: Vec<u32>,
     order: Vec<u32>,
+    /// The chunk totals, then the levels of their scan (`counting_sort::scan_levels`).
     chunk_offsets: Vec<u32>,
+    chunks: usize,
 }
 
 /// How far below the support radius (relative) a periodic axis's cells may fall: a period
@@ -52,7 +55,8 @@ impl NeighborGrid {
             counters: (0..buckets).map(|_| AtomicU32::new(0)).collect(),
             cell_start: vec![0; buckets + 1],
             order: vec![0; capacity],
-            chunk_offsets: vec![0; buckets.div_ceil(SCAN_CHUNK)],
+            chunk_offsets: vec![0; scan_levels_len(buckets.div_ceil(SCAN_CHUNK))],
+            chunks: buckets.div_ceil(SCAN_CHUNK),
         }
     }
 
@@ -74,13 +78,30 @@ impl NeighborGrid {
         let keys = View::new(&self.cell_key[..n]);
         launch(n, |i| count_particle(i, keys, counters));
 
-        // Exclusive scan: chunk totals in parallel, their offsets serially, then each chunk.
-        let chunks = self.chunk_offsets.len();
-        let totals = view_mut(&mut self.chunk_offsets, chunks);
+        // Exclusive scan: chunk totals in parallel, their offsets by levels, then each chunk.
+        let chunks = self.chunks;
+        let levels = ViewMut::new(&mut self.chunk_offsets);
+        let totals = levels.range(0, chunks);
         // SAFETY: invocation c writes only entry c.
         launch(chunks, |c| unsafe { totals.write(c, chunk_total(c, SCAN_CHUNK, counters)) });
-        scan_chunk_offsets(totals);
-        let offsets = View::new(&self.chunk_offsets);
+        let level = |(start, len): (usize, usize)| levels.range(start, len);
+        let scanned = scan_by_levels::<std::convert::Infallible>(chunks, |step| {
+            match step {
+                ScanStep::Up { values, sums } => {
+                    let (values, sums) = (level(values).read(), level(sums));
+                    // SAFETY: as above.
+                    launch(sums.len(), |c| unsafe { sums.write(c, sum_chunk(c, values)) });
+                }
+                ScanStep::Top(top) => scan_chunk_offsets(level(top)),
+                ScanStep::Down { values, offsets } => {
+                    let (values, offsets) = (level(values), level(offsets).read());
+                    launch(offsets.len(), |c| scan_chunk_in_place(c, offsets.at(c), values));
+                }
+            }
+            Ok(())
+        });
+        let Ok(()) = scanned;
+        let offsets = totals.read();
         let starts = ViewMut::new(&mut self.cell_start);
         launch(chunks, |c| scan_chunk(c, SCAN_CHUNK, offsets.at(c), counters, starts));
 

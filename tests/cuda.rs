@@ -30,6 +30,7 @@ use coil_kernels::topology::{Open, Periodic, Topology};
 use coil_kernels::velocity_gradient::StressArgs;
 use coil_kernels::view::{View, ViewMut};
 use coil_kernels::Real;
+use common::uniform;
 use std::collections::HashMap;
 use std::mem::size_of;
 use std::path::Path;
@@ -102,6 +103,8 @@ fn ptx_entry_parameters_match_the_host_argument_layouts() {
         ("count_particles".into(), vec![view, view, size_of::<Counters>()]),
         ("scan_chunk_totals".into(), vec![4, 4, size_of::<Counters>(), view]),
         ("scan_offsets".into(), vec![view]),
+        ("scan_sum_chunks".into(), vec![4, view, view]),
+        ("scan_chunks_in_place".into(), vec![4, view, view]),
         ("scan_chunks".into(), vec![4, 4, view, size_of::<Counters>(), view]),
         ("scatter_particles".into(), vec![view, view, size_of::<Counters>(), view]),
         ("sort_buckets".into(), vec![4, view, view]),
@@ -495,17 +498,6 @@ fn the_bench_profiles_every_launch_of_a_gpu_step() {
     assert!(md.contains("## GPU kernels at 1K"), "{md}");
 }
 
-/// A fixed pseudo-random sequence in [0, 1) (a 64-bit LCG's top 53 bits): fresh inputs for
-/// each seed, the same on every run.
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 /// An array on `gpu` holding `host`.
 fn on_device<T: Copy>(gpu: &Gpu, host: &[T]) -> DeviceArray<T> {
     let mut a = DeviceArray::zeros(gpu, host.len(), "test input").expect("allocation");
@@ -522,9 +514,9 @@ fn to_host<T: Copy + Default>(gpu: &Gpu, a: &DeviceArray<T>, len: usize) -> Vec<
 
 /// Each stage of a step, launched alone on random particles, against the CPU: the cell key of
 /// each particle from the same `hash` function, its histogram, the exclusive scan of that (in
-/// chunks of 16 buckets, so the scan crosses chunks), the stable order by key, the reorder and
-/// the live count, which are what those stages are defined to give; then the density, stress
-/// and acceleration passes against the same functions run on the CPU. 4000 particles over a
+/// chunks of 2 buckets, so the scan of the chunk totals takes two levels), the stable order by
+/// key, the reorder and the live count, which are what those stages are defined to give; then
+/// the density, stress and acceleration passes against the same functions run on the CPU. 4000 particles over a
 /// 8 x 6 x 5 grid of 0.1 m cells (about 17 to a cell, some cells nearly empty) and its margins,
 /// so that about a tenth fall outside and must sort last. The integer stages must agree
 /// exactly on any device; the float passes as `random_stages` says.
@@ -547,11 +539,11 @@ fn random_stages(engine: Engine, seed: u64) {
     let grid = CellGrid { origin: [0.0; 3], inverse_cell_size: [10.0; 3], dims: [8, 6, 5] };
     let (n, cells) = (4000usize, grid.cell_count() as usize);
     let buckets = cells + 1;
-    let mut rng = Lcg(seed);
+    let mut rng = seed;
     // 1.8 % of each edge beyond each face: 1 - 1/1.036^3, about a tenth, lies outside.
     let position: [Vec<f64>; 3] = [0, 1, 2].map(|a| {
         let edge = grid.dims[a] as f64 * 0.1;
-        (0..n).map(|_| edge * (1.036 * rng.next() - 0.018)).collect()
+        (0..n).map(|_| edge * (1.036 * uniform(&mut rng) - 0.018)).collect()
     });
     let positions = Vec3View::new(&position[0], &position[1], &position[2]);
 
@@ -572,9 +564,10 @@ fn random_stages(engine: Engine, seed: u64) {
     let cell_key = on_device(&gpu, &vec![0u32; n]);
     let counters = on_device(&gpu, &vec![0u32; buckets]);
     let cell_start = on_device(&gpu, &vec![0u32; buckets + 1]);
-    let chunk_len = 16usize;
+    // Chunks of 2 buckets: 121 chunk totals, whose scan takes two levels.
+    let chunk_len = 2usize;
     let chunks = buckets.div_ceil(chunk_len);
-    let totals = on_device(&gpu, &vec![0u32; chunks]);
+    let totals = on_device(&gpu, &vec![0u32; coil_kernels::counting_sort::scan_levels_len(chunks)]);
     let sorted_order = on_device(&gpu, &vec![0u32; n]);
     let sorted_x = on_device(&gpu, &vec![0f64; n]);
     let c = ByValue(count.view(1));
@@ -589,7 +582,7 @@ fn random_stages(engine: Engine, seed: u64) {
         assert!(to_host(&gpu, &counters, buckets) == histogram, "{engine:?}, seed {seed}: histogram");
         let t = ByValue(totals.view_mut(chunks));
         gpu.launch("scan_chunk_totals", chunks as u32, &[&chunk_count, &chunk, &counts, &t]).expect("totals");
-        gpu.launch("scan_offsets", 1, &[&t]).expect("offsets");
+        coil::cuda::scan::scan_chunk_totals(&mut gpu, &totals, chunks).expect("offsets");
         let starts = ByValue(cell_start.view_mut(buckets + 1));
         gpu.launch("scan_chunks", chunks as u32, &[&chunk_count, &chunk, &ByValue(totals.view(chunks)), &counts, &starts])
             .expect("scan");
@@ -623,7 +616,7 @@ fn random_stages(engine: Engine, seed: u64) {
     fluid.boundary_count = n as u32 / 4;
     let rheology = cross_law::<f64>(&scene.material.viscosity);
     let sorted: [Vec<f64>; 3] = [0, 1, 2].map(|a| order[..live].iter().map(|&i| position[a][i as usize]).collect());
-    let velocity: [Vec<f64>; 3] = [0, 1, 2].map(|_| (0..live).map(|_| rng.next() - 0.5).collect());
+    let velocity: [Vec<f64>; 3] = [0, 1, 2].map(|_| (0..live).map(|_| uniform(&mut rng) - 0.5).collect());
     let id = &order[..live];
     let mut density = vec![0f64; live];
     let mut stress: [Vec<f64>; 6] = std::array::from_fn(|_| vec![0f64; live]);
@@ -732,5 +725,23 @@ fn random_stages(engine: Engine, seed: u64) {
     }
     for (a, name) in ["x", "y", "z"].iter().enumerate() {
         compare(&format!("acceleration {name}"), &acceleration[a], &device_acceleration[a]);
+    }
+}
+
+/// The device's scan of the chunk totals by levels against prefix sums: 300 000 random totals,
+/// four levels (the 2 million cells of Table I's 1M size make 34 000 chunks, three levels).
+#[test]
+fn the_scan_of_many_chunk_totals_on_the_gpu_gives_the_prefix_sums() {
+    use coil_kernels::counting_sort::scan_levels_len;
+    let totals = 300_000;
+    let mut state = 13u64;
+    let values: Vec<u32> = (0..totals).map(|_| (uniform(&mut state) * 40.0) as u32).collect();
+    let prefix: Vec<u32> = values.iter().scan(0, |sum, &v| Some(std::mem::replace(sum, *sum + v))).collect();
+    for engine in engines() {
+        let mut gpu = engine.open();
+        let mut levels = DeviceArray::<u32>::zeros(&gpu, scan_levels_len(totals), "levels").expect("allocation");
+        levels.upload(&gpu, &values).expect("upload");
+        coil::cuda::scan::scan_chunk_totals(&mut gpu, &levels, totals).expect("scan");
+        assert!(to_host(&gpu, &levels, totals) == prefix, "{engine:?}: the scanned totals are not the prefix sums");
     }
 }

@@ -1,5 +1,7 @@
 //! The kernels' building blocks against analytic values.
 
+mod common;
+
 use coil::scene::DensityKernel;
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
@@ -10,6 +12,7 @@ use coil_kernels::vec3::{Mat3, Vec3};
 use coil_kernels::velocity_gradient::{rate_of_deformation, shear_rate};
 use coil_kernels::view::{Vec3View, Vec3ViewMut, View};
 use coil_kernels::Real;
+use common::uniform;
 
 /// Integral of `f(r)` over the ball of radius h by the midpoint rule in r (4 pi r^2 dr).
 fn radial_integral(h: f64, f: impl Fn(f64) -> f64) -> f64 {
@@ -234,12 +237,6 @@ fn nozzle_tube_contains_its_bore_upstream_of_the_exit() {
     let rectangle = tube(0, [0.05, 0.01]);
     assert!(rectangle.contains([0.049, 1.05, -0.009]));
     assert!(!rectangle.contains([0.0, 1.05, 0.011]), "beyond the half depth");
-}
-
-/// A fixed pseudo-random sequence in [0, 1).
-fn uniform(state: &mut u64) -> f64 {
-    *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-    (*state >> 11) as f64 / (1u64 << 53) as f64
 }
 
 #[test]
@@ -540,4 +537,67 @@ fn hourglass_control_damps_the_odd_even_mode_the_papers_operator_cannot_see() {
     assert!(paper.norm() < 1e-12, "the paper's operator sees the odd-even mode: {paper:?}");
     assert!(morris.x.abs() > 1.0, "Morris's Laplacian of the mode is {morris:?}");
     assert!((controlled - morris * 0.5).norm() < 1e-9 * morris.norm(), "controlled {controlled:?} against Morris {morris:?} / 2");
+}
+
+/// The scan of the sort's chunk totals by levels, run serially as a backend would run it,
+/// against prefix sums: 300 000 totals make four levels (300 000, 4 688, 74, 2), so every
+/// kind of step runs, and chunks end short at every level.
+#[test]
+fn the_scan_by_levels_gives_the_prefix_sums() {
+    use coil_kernels::counting_sort::{
+        scan_by_levels, scan_chunk_in_place, scan_chunk_offsets, scan_levels, scan_levels_len, sum_chunk, ScanStep,
+    };
+    use coil_kernels::view::ViewMut;
+    let totals = 300_000;
+    assert_eq!(scan_levels(totals).collect::<Vec<_>>(), [(0, 300_000), (300_000, 4688), (304_688, 74), (304_762, 2)]);
+    let mut state = 11u64;
+    let values: Vec<u32> = (0..totals).map(|_| (uniform(&mut state) * 40.0) as u32).collect();
+    let mut levels = vec![0u32; scan_levels_len(totals)];
+    levels[..totals].copy_from_slice(&values);
+    let all = ViewMut::new(&mut levels);
+    let level = |(start, len): (usize, usize)| all.range(start, len);
+    let done = scan_by_levels::<()>(totals, |step| {
+        match step {
+            ScanStep::Up { values, sums } => {
+                let (values, sums) = (level(values).read(), level(sums));
+                // SAFETY: one invocation at a time.
+                (0..sums.len()).for_each(|c| unsafe { sums.write(c, sum_chunk(c, values)) });
+            }
+            ScanStep::Top(top) => scan_chunk_offsets(level(top)),
+            ScanStep::Down { values, offsets } => {
+                let (values, offsets) = (level(values), level(offsets).read());
+                (0..offsets.len()).for_each(|c| scan_chunk_in_place(c, offsets.at(c), values));
+            }
+        }
+        Ok(())
+    });
+    assert_eq!(done, Ok(()));
+    let prefix: Vec<u32> = values.iter().scan(0, |sum, &v| Some(std::mem::replace(sum, *sum + v))).collect();
+    assert!(levels[..totals] == prefix[..], "the scanned totals are not the prefix sums");
+}
+
+/// The CPU's sort on a grid of 343 000 cells (84 scan chunks of 4096, so its scan has two
+/// levels): every cell's run holds exactly the particles hashed to it.
+#[test]
+fn a_grid_of_many_scan_chunks_sorts_every_particle_into_its_cell() {
+    use coil::neighbor_grid::NeighborGrid;
+    use coil::particles::{ModelFields, Particles};
+    use coil_kernels::cell_grid::hash;
+    let n = 20_000;
+    let mut grid = NeighborGrid::new([0.0; 3], [0.7; 3], 0.01, [false; 3], n);
+    assert_eq!(grid.grid.cell_count(), 343_000);
+    let mut p = Particles::<f64>::with_capacity(n, ModelFields::default());
+    let mut state = 5u64;
+    for id in 0..n as u32 {
+        p.push(id, [0, 1, 2].map(|_| 0.7 * uniform(&mut state)), [0.0; 3]);
+    }
+    assert_eq!(grid.sort(&mut p), 0);
+    let nb = grid.neighborhood(p.position_view(), Open);
+    let cells = grid.grid.cell_count() as usize;
+    assert_eq!(nb.cell_start.at(cells) as usize, n, "every particle is inside");
+    for c in 0..cells {
+        for i in nb.cell_start.at(c)..nb.cell_start.at(c + 1) {
+            assert_eq!(hash(i as usize, &grid.grid, &p.position_view()) as usize, c, "particle {i} in the run of cell {c}");
+        }
+    }
 }

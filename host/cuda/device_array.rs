@@ -74,6 +74,25 @@ impl<T: Copy> DeviceArray<T> {
         // SAFETY: as for `view`.
         unsafe { ViewMut::from_raw(self.address as *mut T, len) }
     }
+
+    /// A kernel view of the `len` elements from `start`.
+    pub fn view_range(&self, start: usize, len: usize) -> View<'static, T> {
+        assert!(start + len <= self.len);
+        // SAFETY: as for `view`.
+        unsafe { View::from_raw(self.element_address(start) as *const T, len) }
+    }
+
+    pub fn view_mut_range(&self, start: usize, len: usize) -> ViewMut<'static, T> {
+        assert!(start + len <= self.len);
+        // SAFETY: as for `view`.
+        unsafe { ViewMut::from_raw(self.element_address(start) as *mut T, len) }
+    }
+
+    /// The device address of element `k`: arithmetic on the number, since the host never
+    /// dereferences it.
+    fn element_address(&self, k: usize) -> u64 {
+        self.address + (k * std::mem::size_of::<T>()) as u64
+    }
 }
 
 impl DeviceArray<u32> {

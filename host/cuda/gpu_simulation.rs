@@ -9,6 +9,7 @@
 
 use super::device_array::{vec3_view, vec3_view_mut, vec3_zeros, DeviceArray, DeviceVec3};
 use super::gpu::{ByValue, CudaError, Gpu};
+use super::scan::scan_chunk_totals;
 use crate::model::{Model, ParticleState, Passes};
 use crate::particles::{ModelFields, Particles};
 use crate::scene::DensityKernel;
@@ -16,6 +17,7 @@ use crate::simulation::{inject, Instability, Simulation};
 use crate::time_step::Limit;
 use coil_kernels::acceleration::{AccelerationArgs, ViscousOperator};
 use coil_kernels::cell_grid::{HashArgs, Neighborhood};
+use coil_kernels::counting_sort::scan_levels_len;
 use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::density::{DensityArgs, DensityKernel as _, Poly6, Spiky};
 use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
@@ -30,9 +32,14 @@ use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, View};
 use coil_kernels::Real;
 use std::fmt;
 
-/// Buckets per scan chunk on the device: more, shorter chunks than on the CPU keep the serial
-/// chunk loops short.
-const SCAN_CHUNK: usize = 512;
+/// Buckets per scan chunk on the device: more, shorter chunks than on the CPU keep each
+/// thread's loop short; their totals are scanned level by level (`super::scan`).
+const SCAN_CHUNK: usize = 64;
+
+/// Scan chunks of `buckets` buckets.
+fn buckets_chunks(buckets: usize) -> usize {
+    buckets.div_ceil(SCAN_CHUNK)
+}
 
 /// Particles per range of the diagnostics reduction.
 const DIAGNOSTICS_RANGE: usize = 256;
@@ -129,7 +136,7 @@ impl<R: Real> DeviceState<R> {
             counters: DeviceArray::zeros(gpu, buckets, "cell counters")?,
             cell_start: DeviceArray::zeros(gpu, buckets + 1, "cell starts")?,
             order: DeviceArray::zeros(gpu, capacity, "sort order")?,
-            chunk_offsets: DeviceArray::zeros(gpu, buckets.div_ceil(SCAN_CHUNK), "scan chunks")?,
+            chunk_offsets: DeviceArray::zeros(gpu, scan_levels_len(buckets_chunks(buckets)), "scan chunks")?,
             count: DeviceArray::zeros(gpu, 1, "particle count")?,
             staged_position: vec3_zeros(gpu, staged, "inlet layers")?,
             staged_velocity: vec3_zeros(gpu, staged, "inlet layers")?,
@@ -468,7 +475,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         let d = &mut self.device;
         let gpu = &mut self.gpu;
         d.counters.clear(gpu)?;
-        let chunks = d.chunk_offsets.len();
+        let chunks = buckets_chunks(d.counters.len());
         let buckets = d.counters.len();
         let hash = HashArgs { grid, position: vec3_view(&d.position, n), cell_key: d.cell_key.view_mut(n) };
         let keys = ByValue(d.cell_key.view(n));
@@ -481,7 +488,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
             gpu.launch("count_particles", threads, &[&count, &keys, &counters])?;
             let totals = ByValue(d.chunk_offsets.view_mut(chunks));
             gpu.launch("scan_chunk_totals", chunks as u32, &[&ByValue(chunks as u32), &chunk, &counters, &totals])?;
-            gpu.launch("scan_offsets", 1, &[&totals])?;
+            scan_chunk_totals(gpu, &d.chunk_offsets, chunks)?;
             let offsets = ByValue(d.chunk_offsets.view(chunks));
             let starts = ByValue(d.cell_start.view_mut(buckets + 1));
             gpu.launch("scan_chunks", chunks as u32, &[&ByValue(chunks as u32), &chunk, &offsets, &counters, &starts])?;

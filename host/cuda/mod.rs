@@ -4,6 +4,7 @@
 pub mod device_array;
 pub mod gpu;
 pub mod gpu_simulation;
+pub mod scan;
 
 pub use gpu::{CudaError, Gpu, KernelTime};
 pub use gpu_simulation::{GpuSimulation, GpuStepError};

@@ -76,8 +76,8 @@ pub fn chunk_total(chunk: usize, chunk_len: usize, counts: Counters) -> u32 {
     (start..end).map(|k| counts.load(k)).sum()
 }
 
-/// Exclusive scan of the chunk totals into chunk offsets, in place (the middle pass, serial:
-/// one invocation over a few hundred chunks).
+/// Exclusive scan of a level of at most `SCAN_FAN_IN` entries in place, serially: the top of
+/// the scan of the chunk totals (see `scan_levels`).
 #[inline(always)]
 pub fn scan_chunk_offsets(totals: ViewMut<u32>) {
     let mut running = 0u32;
@@ -86,6 +86,79 @@ pub fn scan_chunk_offsets(totals: ViewMut<u32>) {
         // SAFETY: the single invocation owns every entry.
         unsafe { totals.write(c, running) };
         running += total;
+    }
+}
+
+/// Chunk totals summed per level of the scan that gives their offsets.
+pub const SCAN_FAN_IN: usize = 64;
+
+/// The levels of the exclusive scan of `totals` chunk totals, kept one after the other in one
+/// array: level 0 holds the totals, each next level the sums of `SCAN_FAN_IN` entries of the
+/// one before, up to a level of at most `SCAN_FAN_IN` entries, which one invocation scans. A
+/// fine grid has many chunks (2 million cells make 34 000 chunks of 64): a single thread
+/// walking them all would wait on memory for each, in series. Yields (first index, length).
+pub fn scan_levels(totals: usize) -> impl Iterator<Item = (usize, usize)> {
+    let mut next = Some((0, totals));
+    core::iter::from_fn(move || {
+        let level = next?;
+        next = (level.1 > SCAN_FAN_IN).then(|| (level.0 + level.1, level.1.div_ceil(SCAN_FAN_IN)));
+        Some(level)
+    })
+}
+
+/// Entries of the array that holds every level of `scan_levels(totals)`.
+pub fn scan_levels_len(totals: usize) -> usize {
+    scan_levels(totals).map(|(_, len)| len).sum()
+}
+
+/// One launch of the scan of the chunk totals, its levels given as (first index, length) in the
+/// array of [`scan_levels`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ScanStep {
+    /// Fill `sums` with [`sum_chunk`] of `values`, one invocation per entry of `sums`.
+    Up { values: (usize, usize), sums: (usize, usize) },
+    /// Scan the last level with [`scan_chunk_offsets`], one invocation.
+    Top((usize, usize)),
+    /// Scan `values` in place with [`scan_chunk_in_place`] from the scanned `offsets`, one
+    /// invocation per entry of `offsets`.
+    Down { values: (usize, usize), offsets: (usize, usize) },
+}
+
+/// Runs the scan of `totals` chunk totals over `scan_levels(totals)`: up from the totals, the
+/// top, then back down; each backend launches each step its way.
+pub fn scan_by_levels<E>(totals: usize, mut step: impl FnMut(ScanStep) -> Result<(), E>) -> Result<(), E> {
+    let count = scan_levels(totals).count();
+    let level = |k: usize| scan_levels(totals).nth(k).unwrap_or((0, 0));
+    for k in 0..count - 1 {
+        step(ScanStep::Up { values: level(k), sums: level(k + 1) })?;
+    }
+    step(ScanStep::Top(level(count - 1)))?;
+    for k in (0..count - 1).rev() {
+        step(ScanStep::Down { values: level(k), offsets: level(k + 1) })?;
+    }
+    Ok(())
+}
+
+/// Sum of chunk `chunk` of `values`, in chunks of `SCAN_FAN_IN`: one level up the scan.
+#[inline(always)]
+pub fn sum_chunk(chunk: usize, values: View<u32>) -> u32 {
+    let start = chunk * SCAN_FAN_IN;
+    let end = (start + SCAN_FAN_IN).min(values.len());
+    (start..end).map(|k| values.at(k)).sum()
+}
+
+/// Exclusive scan in place of chunk `chunk` of `values`, in chunks of `SCAN_FAN_IN`, starting
+/// from `offset`, the chunk's entry one level up once that level is scanned: one level down.
+#[inline(always)]
+pub fn scan_chunk_in_place(chunk: usize, offset: u32, values: ViewMut<u32>) {
+    let start = chunk * SCAN_FAN_IN;
+    let end = (start + SCAN_FAN_IN).min(values.len());
+    let mut running = offset;
+    for k in start..end {
+        let v = values.at(k);
+        // SAFETY: each chunk owns its range of entries.
+        unsafe { values.write(k, running) };
+        running += v;
     }
 }
 

@@ -13,7 +13,10 @@
 
 use crate::acceleration::{acceleration_pass, AccelerationArgs, MorrisViscosity, StressDivergence, VelocityLaplacian};
 use crate::cell_grid::{hash_pass, HashArgs};
-use crate::counting_sort::{chunk_total, count_particle, gather, scan_chunk, scan_chunk_offsets, scatter, sort_bucket, Counters};
+use crate::counting_sort::{
+    chunk_total, count_particle, gather, scan_chunk, scan_chunk_in_place, scan_chunk_offsets, scatter, sort_bucket, sum_chunk,
+    Counters,
+};
 use crate::cross_viscosity::{Cross, Newtonian};
 use crate::density::{density_pass, DensityArgs, Poly6, Spiky};
 use crate::diagnostics::{diagnostics_pass, DiagnosticsArgs, StateFigures};
@@ -270,6 +273,18 @@ entry!(scan_offsets(t; totals: ViewMut<'static, u32>) {
     }
 });
 
+entry!(scan_sum_chunks(c; chunks: u32, values: View<'static, u32>, sums: ViewMut<'static, u32>) {
+    if c < chunks as usize {
+        sums.write(c, sum_chunk(c, values));
+    }
+});
+
+entry!(scan_chunks_in_place(c; chunks: u32, offsets: View<'static, u32>, values: ViewMut<'static, u32>) {
+    if c < chunks as usize {
+        scan_chunk_in_place(c, offsets.at(c), values);
+    }
+});
+
 entry!(scan_chunks(c;
     chunks: u32,
     chunk_len: u32,
@@ -427,6 +442,8 @@ pub const ENTRIES: &[(&str, Emulated)] = {
         count_particles,
         scan_chunk_totals,
         scan_offsets,
+        scan_sum_chunks,
+        scan_chunks_in_place,
         scan_chunks,
         scatter_particles,
         sort_buckets,

@@ -111,6 +111,13 @@ impl<'a, T: Copy> ViewMut<'a, T> {
         unsafe { *self.ptr.add(i) }
     }
 
+    /// The `len` elements from `start`, for a pass over part of the array.
+    pub fn range(&self, start: usize, len: usize) -> Self {
+        assert!(start + len <= self.len, "a range beyond the view");
+        // SAFETY: within this view's elements.
+        unsafe { Self::from_raw(self.ptr.add(start), len) }
+    }
+
     /// The same array, read-only: what a later pass reads of what this one wrote.
     #[inline(always)]
     pub fn read(&self) -> View<'a, T> {

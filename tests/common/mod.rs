@@ -54,3 +54,9 @@ max_m = [{fx}, {fy}, {fz}]
 pub fn coil(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_coil")).args(args).output().expect("coil runs")
 }
+
+/// A fixed pseudo-random sequence in [0, 1) (a 64-bit LCG's top 53 bits).
+pub fn uniform(state: &mut u64) -> f64 {
+    *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    (*state >> 11) as f64 / (1u64 << 53) as f64
+}
