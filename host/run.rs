@@ -32,10 +32,10 @@ pub enum Backend {
 }
 
 #[cfg(feature = "cuda")]
-type Device = crate::cuda::Gpu;
+pub type Device = crate::cuda::Gpu;
 /// This build has no CUDA backend: no device can exist.
 #[cfg(not(feature = "cuda"))]
-enum Device {}
+pub enum Device {}
 
 /// Opens the device `backend` asks for; `None` runs on the CPU. Says which it chose.
 fn open_device(backend: Backend, quiet: bool) -> Result<Option<Device>, String> {
@@ -141,8 +141,15 @@ impl fmt::Display for RunError {
     }
 }
 
-/// Runs `scene` (read from `scene_file`) to its end time.
+/// Runs `scene` (read from `scene_file`) to its end time, on the backend `options` asks for.
 pub fn run(scene: &Scene, scene_file: &str, options: &RunOptions) -> Result<Summary, RunError> {
+    let device = open_device(options.backend, options.quiet).map_err(RunError::Backend)?;
+    run_on(device, scene, scene_file, options)
+}
+
+/// [`run`] on a device already opened (the emulated one, in tests), or on the CPU for `None`;
+/// `options.backend` is not consulted.
+pub fn run_on(device: Option<Device>, scene: &Scene, scene_file: &str, options: &RunOptions) -> Result<Summary, RunError> {
     let initial = initial_particles(scene, scene_file).map_err(RunError::Scene)?;
     std::fs::create_dir_all(&options.out_dir).map_err(|e| {
         RunError::Scene(SceneError {
@@ -152,7 +159,6 @@ pub fn run(scene: &Scene, scene_file: &str, options: &RunOptions) -> Result<Summ
         })
     })?;
     let precision = options.precision.unwrap_or(scene.simulation.precision);
-    let device = open_device(options.backend, options.quiet).map_err(RunError::Backend)?;
     let mut log = RunLog {
         coil_version: env!("CARGO_PKG_VERSION"),
         scene_file,

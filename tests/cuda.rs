@@ -745,3 +745,100 @@ fn the_scan_of_many_chunk_totals_on_the_gpu_gives_the_prefix_sums() {
         assert!(to_host(&gpu, &levels, totals) == prefix, "{engine:?}: the scanned totals are not the prefix sums");
     }
 }
+
+/// Options for a quiet run into `out`, on the backend `run_on` is given.
+fn run_options(out: &Path) -> coil::run::RunOptions {
+    coil::run::RunOptions {
+        backend: coil::run::Backend::Cpu,
+        out_dir: out.to_path_buf(),
+        precision: None,
+        quiet: true,
+        preview: false,
+        overrides: vec![],
+    }
+}
+
+/// The files of a run's folder, by name, with their bytes.
+fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .expect("output folder")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "vtu" || e == "pvd"))
+        .map(|p| (p.file_name().expect("a name").to_string_lossy().into_owned(), std::fs::read(&p).expect("readable")))
+        .collect();
+    files.sort();
+    files
+}
+
+/// `coil run`'s loop on the device, where frames are downloaded and the diagnostics read every
+/// 10 steps: the dam break for 0.04 s, a frame every 0.01 s. dt stays the acoustic term (the
+/// fluid moves at under 1 m/s, c is 20 m/s), so the device's 10-step-old speed cannot change
+/// it, and the emulated device must write the CPU's frames byte for byte; a GPU the same
+/// frames, its positions within the scene tests' 1e-5 m in f32.
+#[test]
+fn a_run_on_the_gpu_writes_the_cpus_frames() {
+    let mut scene = dam_break();
+    scene.simulation.end_time_s = 0.04;
+    scene.output.every_s = Some(0.01);
+    let root = std::env::temp_dir().join(format!("coil-cuda-run-{}", std::process::id()));
+    let cpu_out = root.join("cpu");
+    let cpu = coil::run::run_on(None, &scene, "dam_break.toml", &run_options(&cpu_out)).expect("the CPU run");
+    assert_eq!(cpu.frames, 5, "frames at 0, 0.01, ..., 0.04 s: {cpu:?}");
+    for engine in engines() {
+        let out = root.join(format!("{engine:?}"));
+        let on_gpu = coil::run::run_on(Some(engine.open()), &scene, "dam_break.toml", &run_options(&out)).expect("the run");
+        assert_eq!((on_gpu.steps, on_gpu.frames, on_gpu.fluid_particles), (cpu.steps, cpu.frames, cpu.fluid_particles));
+        let (c, g) = (files(&cpu_out), files(&out));
+        assert!(c.len() > cpu.frames, "the frames and the series file: {:?}", c.iter().map(|f| &f.0).collect::<Vec<_>>());
+        assert_eq!(c.iter().map(|f| &f.0).collect::<Vec<_>>(), g.iter().map(|f| &f.0).collect::<Vec<_>>(), "{engine:?}");
+        if engine == Engine::Emulated {
+            assert!(c == g, "the emulated device's frames differ from the CPU's");
+        } else {
+            for ((name, _), _) in c.iter().zip(&g).filter(|(f, _)| f.0.ends_with(".vtu")) {
+                let (a, b) = (read_frame(&cpu_out.join(name)), read_frame(&out.join(name)));
+                let worst =
+                    a.iter().zip(&b).map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max)).fold(0.0, f64::max);
+                assert!(worst <= 1e-5, "{engine:?}, {name}: positions differ by {worst:.3e} m");
+            }
+        }
+    }
+    std::fs::remove_dir_all(&root).ok();
+}
+
+/// Positions of a frame by particle id.
+fn read_frame(path: &Path) -> Vec<[f64; 3]> {
+    let frame = coil::output::vtu_read::read_frame(path).expect("a whole frame");
+    let mut by_id: Vec<_> = frame.id.iter().zip(&frame.position).map(|(&i, &p)| (i, p)).collect();
+    by_id.sort_by_key(|f| f.0);
+    by_id.into_iter().map(|f| f.1).collect()
+}
+
+/// A run that goes unstable on the device stops with the guard's diagnosis, logs it, and keeps
+/// every frame written before it, none of them with a non-finite position.
+#[test]
+fn an_unstable_run_on_the_gpu_keeps_its_frames() {
+    let mut scene = dam_break();
+    let bound = scene.support_radius() * 0.1 / scene.material.sound_speed_m_s;
+    scene.simulation.time_step.fixed_s = Some(50.0 * bound);
+    scene.simulation.time_step.allow_above_stability_bound = true;
+    scene.simulation.end_time_s = 10.0;
+    scene.output.every_s = Some(0.01);
+    for engine in engines() {
+        let out = std::env::temp_dir().join(format!("coil-cuda-unstable-{}-{engine:?}", std::process::id()));
+        match coil::run::run_on(Some(engine.open()), &scene, "dam_break.toml", &run_options(&out)) {
+            Err(coil::run::RunError::Unstable(instability, summary)) => {
+                assert!(instability.dt_s > instability.stability_bound_s, "{engine:?}: {instability}");
+                assert!(summary.frames >= 1, "{engine:?}: the frame at t = 0 is kept: {summary:?}");
+                let frames = files(&out).into_iter().filter(|f| f.0.starts_with("frame_")).collect::<Vec<_>>();
+                assert_eq!(frames.len(), summary.frames, "{engine:?}");
+                for (name, _) in frames {
+                    assert!(read_frame(&out.join(&name)).iter().flatten().all(|x| x.is_finite()), "{engine:?}, {name}");
+                }
+                let log = std::fs::read_to_string(out.join("run.json")).expect("run log");
+                assert!(log.contains("\"status\": \"unstable\""), "{engine:?}: {log}");
+            }
+            other => panic!("{engine:?}: expected the guard to stop the run, got {other:?}"),
+        }
+        std::fs::remove_dir_all(&out).ok();
+    }
+}
