@@ -6,7 +6,7 @@
 //! nothing waiting in between, so they are what a long run achieves per step.
 
 use crate::model::{with_precision_and_model, Model, ModelFields, WithModel};
-use crate::run::{StepStop, Stepping};
+use crate::run::{Device, StepStop, Stepping};
 use crate::scene::{Precision, Scene};
 use crate::scene_override::{apply, Override};
 use crate::setup::{initial_particles, InitialParticles};
@@ -162,12 +162,6 @@ struct Measure<'a> {
     #[cfg(feature = "cuda")]
     bandwidth: Option<f64>,
 }
-
-#[cfg(feature = "cuda")]
-pub type Device = crate::cuda::Gpu;
-/// This build has no CUDA backend: no device can exist.
-#[cfg(not(feature = "cuda"))]
-pub enum Device {}
 
 impl WithModel for Measure<'_> {
     type Output = (Result<Measurement, String>, Option<Device>);

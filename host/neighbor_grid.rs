@@ -26,7 +26,6 @@ pub struct NeighborGrid {
     order: Vec<u32>,
     /// The chunk totals, then the levels of their scan (`counting_sort::scan_levels`).
     chunk_offsets: Vec<u32>,
-    chunks: usize,
 }
 
 /// How far below the support radius (relative) a periodic axis's cells may fall: a period
@@ -56,7 +55,6 @@ impl NeighborGrid {
             cell_start: vec![0; buckets + 1],
             order: vec![0; capacity],
             chunk_offsets: vec![0; scan_levels_len(buckets.div_ceil(SCAN_CHUNK))],
-            chunks: buckets.div_ceil(SCAN_CHUNK),
         }
     }
 
@@ -79,7 +77,7 @@ impl NeighborGrid {
         launch(n, |i| count_particle(i, keys, counters));
 
         // Exclusive scan: chunk totals in parallel, their offsets by levels, then each chunk.
-        let chunks = self.chunks;
+        let chunks = buckets.div_ceil(SCAN_CHUNK);
         let levels = ViewMut::new(&mut self.chunk_offsets);
         let totals = levels.range(0, chunks);
         // SAFETY: invocation c writes only entry c.

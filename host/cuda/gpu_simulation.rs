@@ -475,8 +475,8 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         let d = &mut self.device;
         let gpu = &mut self.gpu;
         d.counters.clear(gpu)?;
-        let chunks = buckets_chunks(d.counters.len());
         let buckets = d.counters.len();
+        let chunks = buckets_chunks(buckets);
         let hash = HashArgs { grid, position: vec3_view(&d.position, n), cell_key: d.cell_key.view_mut(n) };
         let keys = ByValue(d.cell_key.view(n));
         let counters = ByValue(d.counters.counters());
