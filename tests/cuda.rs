@@ -375,32 +375,12 @@ fn an_unstable_gpu_run_is_stopped_by_the_guard() {
 /// nu = 1e-3 m^2/s, h = 4 mm); 300 steps take the head 0.03 m below the nozzle's exit.
 #[test]
 fn a_jet_on_the_gpu_agrees_with_the_cpu() {
-    let scene = Scene::parse(
-        r#"
-name = "jet"
-[material]
-particle_spacing_m = 0.002
-clamp_negative_pressure = true
-sound_speed_m_s = 2.0
-gravity_m_s2 = [0.0, -9.81, 0.0]
-[material.viscosity]
-nu0_m2_s = 0.001
-[domain]
-min_m = [-0.02, -0.02, -0.02]
-max_m = [0.02, 0.02, 0.02]
-[simulation]
-end_time_s = 1.0
-precision = "f64"
-max_fluid_particles = 20000
-[[inlet]]
-nozzle = { shape = "circle", radius_m = 0.004 }
-position_m = [0.0, 0.0, 0.0]
-direction = [0.0, -1.0, 0.0]
-speed_m_s = 0.5
-"#,
-        "jet.toml",
-    )
-    .expect("valid");
+    let mut scene = common::scene(&common::jet_scene("nozzle = { shape = \"circle\", radius_m = 0.004 }", ""));
+    scene.material.sound_speed_m_s = 2.0;
+    scene.material.gravity_m_s2 = [0.0, -9.81, 0.0];
+    scene.domain.min_m = [-0.02; 3];
+    scene.domain.max_m = [0.02; 3];
+    scene.simulation.max_fluid_particles = Some(20_000);
     let model = StressModel(Newtonian { nu0: 0.001 });
     for engine in engines() {
         let (cpu, on_gpu) = both_with::<f64, _>(engine.open(), &scene, model, 300, 2e-4);

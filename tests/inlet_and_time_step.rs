@@ -8,34 +8,7 @@ use coil::setup::initial_particles;
 use coil::simulation::Simulation;
 use coil::time_step::Limit;
 use coil_kernels::cross_viscosity::Newtonian;
-
-fn jet_scene(nozzle: &str, extra: &str) -> String {
-    format!(
-        r#"
-name = "jet"
-[material]
-particle_spacing_m = 0.002
-clamp_negative_pressure = true
-sound_speed_m_s = 20.0
-gravity_m_s2 = [0.0, 0.0, 0.0]
-[material.viscosity]
-nu0_m2_s = 0.001
-[domain]
-min_m = [-0.05, -0.2, -0.05]
-max_m = [0.05, 0.05, 0.05]
-[simulation]
-end_time_s = 1.0
-precision = "f64"
-max_fluid_particles = 200000
-[[inlet]]
-{nozzle}
-position_m = [0.0, 0.0, 0.0]
-direction = [0.0, -1.0, 0.0]
-speed_m_s = 0.5
-{extra}
-"#
-    )
-}
+use common::jet_scene;
 
 fn delivered_mass_rate(text: &str, nominal_area: f64) {
     let scene = common::scene(text);

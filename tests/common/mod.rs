@@ -50,6 +50,36 @@ max_m = [{fx}, {fy}, {fz}]
     )
 }
 
+/// A downward jet from a nozzle at the origin (0.5 m/s, 2 mm spacing, c = 20 m/s, no gravity)
+/// into a domain reaching 0.2 m below it; `nozzle` and `extra` are TOML lines.
+pub fn jet_scene(nozzle: &str, extra: &str) -> String {
+    format!(
+        r#"
+name = "jet"
+[material]
+particle_spacing_m = 0.002
+clamp_negative_pressure = true
+sound_speed_m_s = 20.0
+gravity_m_s2 = [0.0, 0.0, 0.0]
+[material.viscosity]
+nu0_m2_s = 0.001
+[domain]
+min_m = [-0.05, -0.2, -0.05]
+max_m = [0.05, 0.05, 0.05]
+[simulation]
+end_time_s = 1.0
+precision = "f64"
+max_fluid_particles = 200000
+[[inlet]]
+{nozzle}
+position_m = [0.0, 0.0, 0.0]
+direction = [0.0, -1.0, 0.0]
+speed_m_s = 0.5
+{extra}
+"#
+    )
+}
+
 /// Runs the `coil` binary with `args`.
 pub fn coil(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_coil")).args(args).output().expect("coil runs")
