@@ -366,37 +366,17 @@ pub fn precision_name(p: Precision) -> &'static str {
     }
 }
 
-#[cfg(feature = "cuda")]
+/// The device `options` measure on, when they ask for one.
 fn open_gpu(options: &BenchOptions) -> Result<Option<Device>, String> {
     if !options.backends.contains(&BenchBackend::Cuda) {
         return Ok(None);
     }
-    crate::cuda::Gpu::open().map(Some).map_err(|e| format!("--backend cuda: {e}"))
-}
-
-#[cfg(not(feature = "cuda"))]
-fn open_gpu(options: &BenchOptions) -> Result<Option<Device>, String> {
-    if options.backends.contains(&BenchBackend::Cuda) {
-        return Err(
-            "--backend cuda: this coil was built without the CUDA backend (rebuild with `cargo build --release --features cuda`)"
-                .into(),
-        );
-    }
-    Ok(None)
+    crate::run::open_cuda().map(Some).map_err(|e| format!("--backend cuda: {e}"))
 }
 
 /// Whether `--backend auto` finds a CUDA device, and if not, why.
 pub fn cuda_available() -> Result<(), String> {
-    open_gpu(&BenchOptions {
-        sizes: Vec::new(),
-        precisions: Vec::new(),
-        backends: vec![BenchBackend::Cuda],
-        steps: 0,
-        cpu_large_steps: 0,
-        warmup: 0,
-        profile_steps: 0,
-    })
-    .map(drop)
+    crate::run::open_cuda().map(drop)
 }
 
 /// The device's copy bandwidth (bytes/s), measured once for every configuration's floor.

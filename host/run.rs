@@ -37,14 +37,18 @@ pub type Device = crate::cuda::Gpu;
 #[cfg(not(feature = "cuda"))]
 pub enum Device {}
 
+/// The first CUDA device, or why there is none: no driver, no device, or a build without the
+/// backend.
+pub fn open_cuda() -> Result<Device, String> {
+    #[cfg(feature = "cuda")]
+    return crate::cuda::Gpu::open().map_err(|e| e.to_string());
+    #[cfg(not(feature = "cuda"))]
+    Err("this coil was built without the CUDA backend (rebuild with `cargo build --release --features cuda`)".into())
+}
+
 /// Opens the device `backend` asks for; `None` runs on the CPU. Says which it chose.
 fn open_device(backend: Backend, quiet: bool) -> Result<Option<Device>, String> {
-    #[cfg(feature = "cuda")]
-    let opened = crate::cuda::Gpu::open().map_err(|e| e.to_string());
-    #[cfg(not(feature = "cuda"))]
-    let opened: Result<Device, String> =
-        Err("this coil was built without the CUDA backend (rebuild with `cargo build --release --features cuda`)".into());
-    let device = match (backend, opened) {
+    let device = match (backend, open_cuda()) {
         (Backend::Cpu, _) => None,
         (_, Ok(device)) => Some(device),
         (Backend::Cuda, Err(e)) => return Err(format!("--backend cuda: {e}")),
