@@ -750,6 +750,75 @@ fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
     files
 }
 
+/// Bytes the device holds once `model`'s run of `scene` is on it, and what the run counts (`device_bytes`, the figure `coil run` prints and the README's memory table comes from).
+fn held_and_counted<R: Real, M: Model<R>>(scene: &Scene, model: M) -> (usize, usize) {
+    let initial = initial_particles(scene, "dam_break.toml").expect("particles");
+    let mut on_gpu = GpuSimulation::new(Simulation::<R, M>::new(scene, &initial, model), Gpu::emulated_with_memory(usize::MAX))
+        .expect("device state");
+    let (free, total) = on_gpu.gpu().memory();
+    (total - free, on_gpu.device_bytes())
+}
+
+/// The device memory a run reports is every byte it allocates (the emulated device counts the
+/// bytes each allocation asks for), with each optional field (stress, viscosity, velocity
+/// gradient, wall mirror images) and in both precisions.
+#[test]
+fn the_device_memory_a_run_reports_is_all_it_allocates() {
+    let mut scene = dam_break();
+    let newtonian = Newtonian { nu0: scene.material.viscosity.nu0_m2_s };
+    let mut cases = vec![
+        ("paper's operator, Cross, f32", held_and_counted::<f32, _>(&scene, cross::<f32>(&scene))),
+        ("Laplacian, f32", held_and_counted::<f32, _>(&scene, LaplacianModel(Newtonian { nu0: newtonian.nu0 as f32 }))),
+        (
+            "Morris's, Cross, f64",
+            held_and_counted::<f64, _>(&scene, ShearThinningMorrisModel(cross_law::<f64>(&scene.material.viscosity))),
+        ),
+        (
+            "hourglass control, f64",
+            held_and_counted::<f64, _>(&scene, HourglassStressModel { rheology: newtonian, coefficient: 1.0 }),
+        ),
+    ];
+    scene.simulation.walls = coil::scene::Walls::Mirrored;
+    cases.push(("mirrored walls, f64", held_and_counted::<f64, _>(&scene, cross::<f64>(&scene))));
+    for (case, (held, counted)) in cases {
+        assert_eq!(held, counted, "{case}: bytes the device holds, and the run counts");
+    }
+}
+
+/// A run that does not fit its device stops before its first step with the device's numbers:
+/// the array it could not allocate, the bytes that needed, and the bytes free of the total; it
+/// logs that diagnosis. With exactly the memory it holds, the same run completes.
+#[test]
+fn a_run_too_large_for_its_device_says_what_it_needed() {
+    let mut scene = dam_break();
+    scene.simulation.end_time_s = 0.002;
+    let (held, _) = held_and_counted::<f32, _>(&scene, cross::<f32>(&scene));
+    let root = std::env::temp_dir().join(format!("coil-cuda-memory-{}", std::process::id()));
+    let fits =
+        coil::run::run_on(Some(Gpu::emulated_with_memory(held)), &scene, "dam_break.toml", &run_options(&root.join("fits")));
+    assert!(fits.is_ok(), "a device of exactly the run's {held} bytes: {:?}", fits.err().map(|e| e.to_string()));
+    let small = held - 4096;
+    let out = root.join("small");
+    match coil::run::run_on(Some(Gpu::emulated_with_memory(small)), &scene, "dam_break.toml", &run_options(&out)) {
+        Err(coil::run::RunError::Backend(message)) => {
+            assert!(message.starts_with("out of device memory allocating "), "{message}");
+            // "…: N bytes needed, F of T bytes free; …"
+            let numbers: Vec<usize> = message
+                .split_once(": ")
+                .and_then(|(_, rest)| rest.split_once(';'))
+                .map(|(figures, _)| figures.split([' ', ',']).filter_map(|w| w.parse().ok()).collect())
+                .unwrap_or_default();
+            let [needed, free, total] = numbers[..] else { panic!("needed, free and total bytes in: {message}") };
+            assert_eq!(total, small, "{message}");
+            assert!(needed > free, "{message}");
+            let log = std::fs::read_to_string(out.join("run.json")).expect("run log");
+            assert!(log.contains("\"status\": \"failed\"") && log.contains("out of device memory"), "{log}");
+        }
+        other => panic!("a device of {small} bytes, 4096 short: {:?}", other.map_err(|e| e.to_string())),
+    }
+    std::fs::remove_dir_all(&root).ok();
+}
+
 /// `coil run`'s loop on the device, where frames are downloaded and the diagnostics read every
 /// 10 steps: the dam break for 0.04 s, a frame every 0.01 s. dt stays the acoustic term (the
 /// fluid moves at under 1 m/s, c is 20 m/s), so the device's 10-step-old speed cannot change

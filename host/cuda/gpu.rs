@@ -14,6 +14,7 @@ use cudarc::nvrtc::Ptx;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::fmt;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -88,7 +89,15 @@ struct Device {
 enum Engine {
     Cuda(Device),
     /// The kernels' host builds, over host memory.
-    Emulated,
+    Emulated(EmulatedMemory),
+}
+
+/// The emulated device's memory: what its buffers hold, against a size where one is set.
+struct EmulatedMemory {
+    /// Bytes allocated and not yet freed; shared with the buffers, which give theirs back.
+    used: Arc<AtomicUsize>,
+    /// The device's size (bytes); `None` for as much as the host has.
+    total: Option<usize>,
 }
 
 pub struct Gpu {
@@ -112,16 +121,20 @@ pub enum Buffer {
 pub struct HostMemory {
     words: *mut u64,
     len: usize,
+    /// The bytes asked for, which the device counts as in use until the buffer is dropped.
+    bytes: usize,
+    used: Arc<AtomicUsize>,
 }
 
 // SAFETY: the memory is owned; the run that owns the buffer is the only one to reach it.
 unsafe impl Send for HostMemory {}
 
 impl HostMemory {
-    fn zeroed(bytes: usize) -> Self {
+    fn zeroed(bytes: usize, used: &Arc<AtomicUsize>) -> Self {
         let words: Box<[u64]> = vec![0; bytes.div_ceil(8).max(1)].into_boxed_slice();
         let len = words.len();
-        Self { words: Box::into_raw(words).cast(), len }
+        used.fetch_add(bytes, Ordering::Relaxed);
+        Self { words: Box::into_raw(words).cast(), len, bytes, used: used.clone() }
     }
 }
 
@@ -129,6 +142,7 @@ impl Drop for HostMemory {
     fn drop(&mut self) {
         // SAFETY: `words` came from `Box::into_raw` of `len` words, and is dropped once.
         drop(unsafe { Box::from_raw(std::ptr::slice_from_raw_parts_mut(self.words, self.len)) });
+        self.used.fetch_sub(self.bytes, Ordering::Relaxed);
     }
 }
 
@@ -178,7 +192,18 @@ impl Gpu {
     /// runs the kernels' host builds over all threads of its grid, in parallel and in no
     /// particular order, as a device would.
     pub fn emulated() -> Self {
-        Self { engine: Engine::Emulated, sync_each_launch: false, last_kernel: "(none)", profile: None }
+        Self::emulate(None)
+    }
+
+    /// [`Gpu::emulated`] with `total_bytes` of memory: an allocation beyond it fails as one on a
+    /// device does, so that a run too large for its device is tested without one.
+    pub fn emulated_with_memory(total_bytes: usize) -> Self {
+        Self::emulate(Some(total_bytes))
+    }
+
+    fn emulate(total: Option<usize>) -> Self {
+        let memory = EmulatedMemory { used: Arc::new(AtomicUsize::new(0)), total };
+        Self { engine: Engine::Emulated(memory), sync_each_launch: false, last_kernel: "(none)", profile: None }
     }
 
     /// The device's name and compute capability, for logs.
@@ -193,28 +218,39 @@ impl Gpu {
         }
     }
 
-    /// (free, total) bytes of device memory; none known on the emulated device.
+    /// (free, total) bytes of device memory; none known on an emulated device of no set size.
     pub fn memory(&self) -> (usize, usize) {
         match &self.engine {
             Engine::Cuda(d) => d.ctx.mem_get_info().unwrap_or((0, 0)),
-            Engine::Emulated => (0, 0),
+            Engine::Emulated(EmulatedMemory { used, total: Some(total) }) => {
+                (total.saturating_sub(used.load(Ordering::Relaxed)), *total)
+            }
+            Engine::Emulated(EmulatedMemory { total: None, .. }) => (0, 0),
         }
     }
 
     /// `bytes` zeroed bytes of device memory; `what` names them in an out-of-memory error.
     pub fn zeros(&self, bytes: usize, what: &str) -> Result<Buffer, CudaError> {
-        let Engine::Cuda(d) = &self.engine else {
-            return Ok(Buffer::Host(HostMemory::zeroed(bytes)));
+        let out_of_memory = |bytes| {
+            let (free, total) = self.memory();
+            CudaError::OutOfMemory { what: what.into(), bytes, free, total }
         };
-        // A zero-length allocation is an error in the driver.
-        d.stream.alloc_zeros::<u8>(bytes.max(1)).map(Buffer::Device).map_err(|error| {
-            if error.0 == sys::cudaError_enum::CUDA_ERROR_OUT_OF_MEMORY {
-                let (free, total) = self.memory();
-                CudaError::OutOfMemory { what: what.into(), bytes: bytes.max(1), free, total }
-            } else {
-                CudaError::Driver { call: "cuMemAlloc", error }
+        match &self.engine {
+            // A zero-length allocation is an error in the driver.
+            Engine::Cuda(d) => d.stream.alloc_zeros::<u8>(bytes.max(1)).map(Buffer::Device).map_err(|error| {
+                if error.0 == sys::cudaError_enum::CUDA_ERROR_OUT_OF_MEMORY {
+                    out_of_memory(bytes.max(1))
+                } else {
+                    CudaError::Driver { call: "cuMemAlloc", error }
+                }
+            }),
+            Engine::Emulated(memory) => {
+                if memory.total.is_some_and(|total| memory.used.load(Ordering::Relaxed) + bytes > total) {
+                    return Err(out_of_memory(bytes));
+                }
+                Ok(Buffer::Host(HostMemory::zeroed(bytes, &memory.used)))
             }
-        })
+        }
     }
 
     /// Copies `host` into the start of `device`.
@@ -280,7 +316,7 @@ impl Gpu {
     pub fn synchronize(&self) -> Result<(), CudaError> {
         match &self.engine {
             Engine::Cuda(d) => d.stream.synchronize().map_err(|error| self.failed("cuStreamSynchronize", error)),
-            Engine::Emulated => Ok(()),
+            Engine::Emulated(_) => Ok(()),
         }
     }
 
@@ -292,7 +328,7 @@ impl Gpu {
                 .record_event(Some(sys::CUevent_flags::CU_EVENT_DEFAULT))
                 .map(Mark::Event)
                 .map_err(|error| CudaError::Driver { call: "cuEventRecord", error }),
-            Engine::Emulated => Ok(Mark::Instant(Instant::now())),
+            Engine::Emulated(_) => Ok(Mark::Instant(Instant::now())),
         }
     }
 
@@ -352,7 +388,7 @@ impl Gpu {
         match (&self.engine, buffer) {
             (Engine::Cuda(d), Buffer::Device(slice)) => slice.device_ptr(&d.stream).0,
             (_, Buffer::Host(memory)) => memory.words as u64,
-            (Engine::Emulated, Buffer::Device(_)) => unreachable!("a device buffer on the emulated device"),
+            (Engine::Emulated(_), Buffer::Device(_)) => unreachable!("a device buffer on the emulated device"),
         }
     }
 
@@ -384,7 +420,7 @@ impl Gpu {
                     d.stream.synchronize().map_err(|error| CudaError::Launch { kernel: name.into(), error })?;
                 }
             }
-            Engine::Emulated => {
+            Engine::Emulated(_) => {
                 let entry: Emulated =
                     ENTRIES.iter().find(|(n, _)| *n == name).ok_or_else(|| CudaError::MissingKernel(name.into()))?.1;
                 let params: Vec<Param> = args.iter().map(|a| a.param()).collect();

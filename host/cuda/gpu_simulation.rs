@@ -166,6 +166,7 @@ impl<R: Real> DeviceState<R> {
             + self.cell_start.bytes()
             + self.order.bytes()
             + self.chunk_offsets.bytes()
+            + self.count.bytes()
             + v3(&self.staged_position)
             + r3(&self.staged_velocity)
             + self.staged_id.bytes()
