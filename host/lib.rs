@@ -23,4 +23,5 @@ pub mod setup;
 pub mod simulation;
 pub mod statistics;
 pub mod time_step;
+pub mod toml_field;
 pub mod validation;

@@ -491,7 +491,7 @@ impl Scene {
     pub fn parse(text: &str, file: &str) -> Result<Scene, SceneError> {
         let scene: Scene = toml::from_str(text).map_err(|e| SceneError {
             file: file.into(),
-            field: "(syntax)".into(),
+            field: e.span().and_then(|s| crate::toml_field::field_at(text, s.start)).unwrap_or_else(|| "(syntax)".into()),
             reason: e.message().to_string()
                 + &suggestion(e.message())
                 + &e.span().map(|s| format!(" (at line {})", 1 + text[..s.start].matches('\n').count())).unwrap_or_default(),

@@ -154,6 +154,30 @@ fn a_nozzle_wobbling_a_spacing_or_a_tube_outside_the_domain_is_refused() {
     }
 }
 
+/// Mistakes serde finds by position (an unknown field, a wrong type, an unknown variant, a
+/// missing field) name the field as `--set` spells it, with the line; broken TOML is a syntax
+/// error at its line.
+#[test]
+fn a_mistyped_field_is_named_as_set_spells_it() {
+    let good = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/round_jet.toml")).expect("scene");
+    let cases = [
+        ("sound_speed_m_s = ", "sound_speed_ms = ", "material.sound_speed_ms", "unknown field"),
+        ("precision = \"f32\"", "precision = \"f16\"", "simulation.precision", "unknown variant `f16`"),
+        ("speed_m_s = 1.0", "speed_m_s = \"fast\"", "inlet[0].speed_m_s", "expected f64"),
+        ("shape = \"circle\"", "shape = \"hexagon\"", "inlet[0].nozzle.shape", "unknown variant `hexagon`"),
+        ("particle_spacing_m = 0.004\n", "", "material", "missing field `particle_spacing_m`"),
+        ("[simulation]", "[simulation", "(syntax)", "table header"),
+    ];
+    for (from, to, field, reason) in cases {
+        assert!(good.contains(from), "{from}");
+        let e = Scene::parse(&good.replacen(from, to, 1), "jet.toml").expect_err(to);
+        assert!(
+            e.file == "jet.toml" && e.field == field && e.reason.contains(reason) && e.reason.contains("(at line"),
+            "{to}: {e}"
+        );
+    }
+}
+
 /// A period written in decimal as exactly 3 h (0.0003 m for h = 2 x 5e-5 m) is 3 h less a
 /// rounding in binary; it is accepted and split into 3 cells. A period a spacing short is not.
 #[test]
