@@ -54,6 +54,10 @@ enum Command {
         /// viscosity from nu_inf to nu0, or by speed for a Newtonian fluid).
         #[arg(long)]
         preview: bool,
+        /// Replace an earlier run in the output folder (its log, series and frames; nothing
+        /// else there). Without it such a folder is refused, so that no run is lost by mistake.
+        #[arg(long)]
+        overwrite: bool,
     },
     /// Render a frame to a PNG: orthographic, coloured by viscosity (as the paper's figures) or
     /// speed, with a colour bar.
@@ -334,7 +338,7 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Run { scene, set, out, backend, precision, threads, quiet, preview } => {
+        Command::Run { scene, set, out, backend, precision, threads, quiet, preview, overwrite } => {
             let file = scene.display().to_string();
             let parsed = match set_threads(threads).and_then(|()| load_scene(&scene, &set)) {
                 Ok(s) => s,
@@ -354,6 +358,7 @@ fn main() -> ExitCode {
                 quiet,
                 preview,
                 overrides: set,
+                overwrite,
             };
             match run(&parsed, &file, &options) {
                 Ok(summary) => {

@@ -84,6 +84,8 @@ pub struct RunOptions {
     pub preview: bool,
     /// The `--set` overrides the scene went through, for the run log.
     pub overrides: Vec<String>,
+    /// Replace an earlier run's files in `out_dir`; without it such a folder is refused.
+    pub overwrite: bool,
 }
 
 /// What a run did, printed at its end.
@@ -155,6 +157,7 @@ pub fn run(scene: &Scene, scene_file: &str, options: &RunOptions) -> Result<Summ
 /// `options.backend` is not consulted.
 pub fn run_on(device: Option<Device>, scene: &Scene, scene_file: &str, options: &RunOptions) -> Result<Summary, RunError> {
     let initial = initial_particles(scene, scene_file).map_err(RunError::Scene)?;
+    clear_earlier_run(scene_file, options)?;
     std::fs::create_dir_all(&options.out_dir).map_err(|e| {
         RunError::Scene(SceneError {
             file: scene_file.into(),
@@ -187,6 +190,36 @@ pub fn run_on(device: Option<Device>, scene: &Scene, scene_file: &str, options: 
     };
     log.write(&options.out_dir).map_err(|e| io_error("run log", &log_path, e))?;
     result
+}
+
+/// Refuses an output folder that holds an earlier run, whose frames the new run would
+/// overwrite in part and leave stale past its own last frame; with `--overwrite`, removes that
+/// run's files first.
+fn clear_earlier_run(scene_file: &str, options: &RunOptions) -> Result<(), RunError> {
+    let dir = &options.out_dir;
+    let earlier = crate::output::earlier_run_files(dir).map_err(|e| io_error("output folder", dir, e))?;
+    if earlier.is_empty() {
+        return Ok(());
+    }
+    if !options.overwrite {
+        let frames = earlier
+            .iter()
+            .filter(|f| f.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with("frame_") && n.ends_with(".vtu")))
+            .count();
+        return Err(RunError::Scene(SceneError {
+            file: scene_file.into(),
+            field: "--out".into(),
+            reason: format!(
+                "output folder {} holds an earlier run ({} files, {frames} frames); pass --overwrite to replace it, or --out another folder",
+                dir.display(),
+                earlier.len()
+            ),
+        }));
+    }
+    for file in &earlier {
+        std::fs::remove_file(file).map_err(|e| io_error("an earlier run's file", file, e))?;
+    }
+    Ok(())
 }
 
 /// The time loop of a run, for whichever physics variant the scene picks.

@@ -735,6 +735,7 @@ fn run_options(out: &Path) -> coil::run::RunOptions {
         quiet: true,
         preview: false,
         overrides: vec![],
+        overwrite: false,
     }
 }
 

@@ -78,6 +78,37 @@ fn bad_scenes_exit_2_naming_file_and_field() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A second run into a folder holding an earlier one is refused, leaving it as it was; with
+/// `--overwrite` the earlier run's files go (no stale frame past the new run's last survives)
+/// and the user's own files stay.
+#[test]
+fn an_earlier_run_is_kept_unless_overwrite_is_given() {
+    let dir = std::env::temp_dir().join(format!("coil-overwrite-{}", std::process::id()));
+    let out = dir.join("out");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    let run = |end: &str, extra: &[&str]| {
+        let mut args = vec!["run", scene.to_str().expect("utf-8"), "--out", out.to_str().expect("utf-8"), "--quiet"];
+        args.extend(["--backend", "cpu", "--set", end, "--set", "output.every_s=0.002"]);
+        args.extend(extra);
+        coil(&args)
+    };
+    let first = run("simulation.end_time_s=0.004", &[]);
+    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+    std::fs::write(out.join("notes.txt"), "mine").expect("a file of the user's");
+    let frame = std::fs::read(out.join("frame_000002.vtu")).expect("the first run's last frame");
+    let again = run("simulation.end_time_s=0.002", &[]);
+    let message = String::from_utf8_lossy(&again.stderr);
+    assert_eq!(again.status.code(), Some(2), "{message}");
+    assert!(message.contains("--out") && message.contains("earlier run") && message.contains("--overwrite"), "{message}");
+    assert_eq!(std::fs::read(out.join("frame_000002.vtu")).expect("kept"), frame, "the refused run touched the folder");
+    let replaced = run("simulation.end_time_s=0.002", &["--overwrite"]);
+    assert!(replaced.status.success(), "{}", String::from_utf8_lossy(&replaced.stderr));
+    assert!(!out.join("frame_000002.vtu").exists(), "a stale frame of the earlier run survived");
+    assert!(out.join("frame_000001.vtu").is_file());
+    assert_eq!(std::fs::read_to_string(out.join("notes.txt")).expect("the user's file"), "mine");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn a_short_run_writes_a_frame_series() {
     let dir = std::env::temp_dir().join(format!("coil-run-{}", std::process::id()));

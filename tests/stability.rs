@@ -17,6 +17,7 @@ fn cpu_options(out: &Path) -> RunOptions {
         quiet: true,
         preview: false,
         overrides: vec![],
+        overwrite: false,
     }
 }
 
