@@ -238,7 +238,13 @@ impl WithModel for Drive<'_> {
             None => drive(sim, self.scene, self.initial, self.options),
             #[cfg(feature = "cuda")]
             Some(gpu) => {
-                let sim = crate::cuda::GpuSimulation::new(sim, gpu).map_err(|e| RunError::Backend(e.to_string()))?;
+                let sim = crate::cuda::GpuSimulation::new(sim, gpu).map_err(|e| match e {
+                    // f32 state takes about two thirds of f64's (the README's memory table).
+                    crate::cuda::CudaError::OutOfMemory { .. } if R::NAME == "f64" => {
+                        RunError::Backend(format!("{e}, or run --precision f32 (about two thirds of the memory)"))
+                    }
+                    e => RunError::Backend(e.to_string()),
+                })?;
                 if !self.options.quiet {
                     let bytes = sim.device_bytes();
                     let per_particle = bytes / sim.host.particles.capacity().max(1);

@@ -788,7 +788,8 @@ fn the_device_memory_a_run_reports_is_all_it_allocates() {
 
 /// A run that does not fit its device stops before its first step with the device's numbers:
 /// the array it could not allocate, the bytes that needed, and the bytes free of the total; it
-/// logs that diagnosis. With exactly the memory it holds, the same run completes.
+/// logs that diagnosis, and points an f64 run to f32. With exactly the memory it holds, the
+/// same run completes.
 #[test]
 fn a_run_too_large_for_its_device_says_what_it_needed() {
     let mut scene = dam_break();
@@ -812,10 +813,19 @@ fn a_run_too_large_for_its_device_says_what_it_needed() {
             let [needed, free, total] = numbers[..] else { panic!("needed, free and total bytes in: {message}") };
             assert_eq!(total, small, "{message}");
             assert!(needed > free, "{message}");
+            assert!(!message.contains("--precision f32"), "an f32 run is told to run in f32: {message}");
             let log = std::fs::read_to_string(out.join("run.json")).expect("run log");
             assert!(log.contains("\"status\": \"failed\"") && log.contains("out of device memory"), "{log}");
         }
         other => panic!("a device of {small} bytes, 4096 short: {:?}", other.map_err(|e| e.to_string())),
+    }
+    // In f64 the state the f32 run fits into is too small, and f32 is the way out.
+    let in_f64 = coil::run::RunOptions { precision: Some(coil::scene::Precision::F64), ..run_options(&root.join("f64")) };
+    match coil::run::run_on(Some(Gpu::emulated_with_memory(held)), &scene, "dam_break.toml", &in_f64) {
+        Err(coil::run::RunError::Backend(message)) => {
+            assert!(message.starts_with("out of device memory") && message.contains("--precision f32"), "{message}")
+        }
+        other => panic!("f64 on the f32 run's device: {:?}", other.map_err(|e| e.to_string())),
     }
     std::fs::remove_dir_all(&root).ok();
 }

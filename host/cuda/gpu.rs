@@ -52,7 +52,7 @@ impl fmt::Display for CudaError {
             CudaError::NoDevice => f.write_str("the CUDA driver reports no device; use --backend cpu"),
             CudaError::OutOfMemory { what, bytes, free, total } => write!(
                 f,
-                "out of device memory allocating {what}: {bytes} bytes needed, {free} of {total} bytes free; lower the particle count (spacing, max_fluid_particles) or use --precision f32"
+                "out of device memory allocating {what}: {bytes} bytes needed, {free} of {total} bytes free; lower the particle count (spacing, max_fluid_particles)"
             ),
             CudaError::PtxLoad(e) => {
                 write!(f, "the CUDA driver could not load coil's PTX ({e}); the driver may be older than the PTX ISA, set COIL_PTX_TARGET_CPU and rebuild")
