@@ -31,6 +31,8 @@ pub struct Report {
     pub limit: Limit,
     pub steps: f64,
     pub memory_bytes: usize,
+    /// Device memory of the same run on the CUDA backend (bytes), in builds that have it.
+    pub device_memory_bytes: Option<usize>,
     pub precision: Precision,
     pub threads: usize,
     /// Measured cost of one particle through one step (s), from the calibration run.
@@ -60,6 +62,9 @@ impl fmt::Display for Report {
         writeln!(f, "dt                 {:.3e} s, limited by the {}", self.dt_s, self.limit)?;
         writeln!(f, "steps              {:.0}", self.steps)?;
         writeln!(f, "memory             {mib:.1} MiB of particle and grid arrays ({:?})", self.precision)?;
+        if let Some(bytes) = self.device_memory_bytes {
+            writeln!(f, "device memory      {:.1} MiB with --backend cuda", bytes as f64 / (1024.0 * 1024.0))?;
+        }
         writeln!(
             f,
             "calibration        {:.3e} s per particle-step over {} steps on {} thread(s)",
@@ -139,6 +144,7 @@ struct RunPlan {
     fluid_capacity: usize,
     stepper: TimeStepper,
     memory_bytes: usize,
+    device_memory_bytes: Option<usize>,
 }
 
 struct Plan<'a> {
@@ -150,12 +156,16 @@ impl WithModel for Plan<'_> {
     type Output = RunPlan;
     fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
         let sim = Simulation::<R, M>::new(self.scene, self.initial, model);
-        RunPlan {
-            inlets: sim.inlets().to_vec(),
-            fluid_capacity: sim.fluid_capacity(),
-            stepper: sim.stepper,
-            memory_bytes: sim.memory_bytes(),
-        }
+        let (inlets, fluid_capacity, stepper, memory_bytes) =
+            (sim.inlets().to_vec(), sim.fluid_capacity(), sim.stepper, sim.memory_bytes());
+        // Counted by allocating it on the emulated device, whose memory is the host's: the
+        // figure `coil run --backend cuda` prints, with no GPU needed.
+        #[cfg(feature = "cuda")]
+        let device_memory_bytes =
+            crate::cuda::GpuSimulation::new(sim, crate::cuda::Gpu::emulated()).ok().map(|g| g.device_bytes());
+        #[cfg(not(feature = "cuda"))]
+        let device_memory_bytes = None;
+        RunPlan { inlets, fluid_capacity, stepper, memory_bytes, device_memory_bytes }
     }
 }
 
@@ -205,6 +215,7 @@ pub fn check(scene: &Scene, file: &str, precision: Option<Precision>, calibratio
         limit,
         steps,
         memory_bytes: plan.memory_bytes,
+        device_memory_bytes: plan.device_memory_bytes,
         precision,
         threads: rayon::current_num_threads(),
         seconds_per_particle_step,

@@ -762,7 +762,7 @@ fn held_and_counted<R: Real, M: Model<R>>(scene: &Scene, model: M) -> (usize, us
 
 /// The device memory a run reports is every byte it allocates (the emulated device counts the
 /// bytes each allocation asks for), with each optional field (stress, viscosity, velocity
-/// gradient, wall mirror images) and in both precisions.
+/// gradient, wall mirror images) and in both precisions; `coil check` reports the same figure.
 #[test]
 fn the_device_memory_a_run_reports_is_all_it_allocates() {
     let mut scene = dam_break();
@@ -781,9 +781,14 @@ fn the_device_memory_a_run_reports_is_all_it_allocates() {
     ];
     scene.simulation.walls = coil::scene::Walls::Mirrored;
     cases.push(("mirrored walls, f64", held_and_counted::<f64, _>(&scene, cross::<f64>(&scene))));
+    let dam_break_f32 = cases[0].1 .1;
     for (case, (held, counted)) in cases {
         assert_eq!(held, counted, "{case}: bytes the device holds, and the run counts");
     }
+    // `coil check` tells it before a run.
+    let report = coil::check::check(&dam_break(), "dam_break.toml", Some(coil::scene::Precision::F32), std::time::Duration::ZERO)
+        .expect("a valid scene");
+    assert_eq!(report.device_memory_bytes, Some(dam_break_f32), "coil check's device memory");
 }
 
 /// A run that does not fit its device stops before its first step with the device's numbers:
