@@ -342,7 +342,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
             self.after_sort(Open, dt)?;
         }
         self.host.advance_clock(dt, limit);
-        if self.host.steps % self.check_every == 0 {
+        if self.host.steps.is_multiple_of(self.check_every) {
             self.read_diagnostics()?;
         }
         Ok(())
