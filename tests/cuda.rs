@@ -30,7 +30,7 @@ use coil_kernels::topology::{Open, Periodic, Topology};
 use coil_kernels::velocity_gradient::StressArgs;
 use coil_kernels::view::{View, ViewMut};
 use coil_kernels::Real;
-use common::uniform;
+use common::{quiet_run_options, uniform};
 use std::collections::HashMap;
 use std::mem::size_of;
 use std::path::Path;
@@ -726,19 +726,6 @@ fn the_scan_of_many_chunk_totals_on_the_gpu_gives_the_prefix_sums() {
     }
 }
 
-/// Options for a quiet run into `out`, on the backend `run_on` is given.
-fn run_options(out: &Path) -> coil::run::RunOptions {
-    coil::run::RunOptions {
-        backend: coil::run::Backend::Cpu,
-        out_dir: out.to_path_buf(),
-        precision: None,
-        quiet: true,
-        preview: false,
-        overrides: vec![],
-        overwrite: false,
-    }
-}
-
 /// The files of a run's folder, by name, with their bytes.
 fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
     let mut files: Vec<_> = std::fs::read_dir(dir)
@@ -801,12 +788,16 @@ fn a_run_too_large_for_its_device_says_what_it_needed() {
     scene.simulation.end_time_s = 0.002;
     let (held, _) = held_and_counted::<f32, _>(&scene, cross::<f32>(&scene));
     let root = std::env::temp_dir().join(format!("coil-cuda-memory-{}", std::process::id()));
-    let fits =
-        coil::run::run_on(Some(Gpu::emulated_with_memory(held)), &scene, "dam_break.toml", &run_options(&root.join("fits")));
+    let fits = coil::run::run_on(
+        Some(Gpu::emulated_with_memory(held)),
+        &scene,
+        "dam_break.toml",
+        &quiet_run_options(&root.join("fits")),
+    );
     assert!(fits.is_ok(), "a device of exactly the run's {held} bytes: {:?}", fits.err().map(|e| e.to_string()));
     let small = held - 4096;
     let out = root.join("small");
-    match coil::run::run_on(Some(Gpu::emulated_with_memory(small)), &scene, "dam_break.toml", &run_options(&out)) {
+    match coil::run::run_on(Some(Gpu::emulated_with_memory(small)), &scene, "dam_break.toml", &quiet_run_options(&out)) {
         Err(coil::run::RunError::Backend(message)) => {
             assert!(message.starts_with("out of device memory allocating "), "{message}");
             // "…: N bytes needed, F of T bytes free; …"
@@ -825,7 +816,7 @@ fn a_run_too_large_for_its_device_says_what_it_needed() {
         other => panic!("a device of {small} bytes, 4096 short: {:?}", other.map_err(|e| e.to_string())),
     }
     // In f64 the state the f32 run fits into is too small, and f32 is the way out.
-    let in_f64 = coil::run::RunOptions { precision: Some(coil::scene::Precision::F64), ..run_options(&root.join("f64")) };
+    let in_f64 = coil::run::RunOptions { precision: Some(coil::scene::Precision::F64), ..quiet_run_options(&root.join("f64")) };
     match coil::run::run_on(Some(Gpu::emulated_with_memory(held)), &scene, "dam_break.toml", &in_f64) {
         Err(coil::run::RunError::Backend(message)) => {
             assert!(message.starts_with("out of device memory") && message.contains("--precision f32"), "{message}")
@@ -847,11 +838,11 @@ fn a_run_on_the_gpu_writes_the_cpus_frames() {
     scene.output.every_s = Some(0.01);
     let root = std::env::temp_dir().join(format!("coil-cuda-run-{}", std::process::id()));
     let cpu_out = root.join("cpu");
-    let cpu = coil::run::run_on(None, &scene, "dam_break.toml", &run_options(&cpu_out)).expect("the CPU run");
+    let cpu = coil::run::run_on(None, &scene, "dam_break.toml", &quiet_run_options(&cpu_out)).expect("the CPU run");
     assert_eq!(cpu.frames, 5, "frames at 0, 0.01, ..., 0.04 s: {cpu:?}");
     for engine in engines() {
         let out = root.join(format!("{engine:?}"));
-        let on_gpu = coil::run::run_on(Some(engine.open()), &scene, "dam_break.toml", &run_options(&out)).expect("the run");
+        let on_gpu = coil::run::run_on(Some(engine.open()), &scene, "dam_break.toml", &quiet_run_options(&out)).expect("the run");
         assert_eq!((on_gpu.steps, on_gpu.frames, on_gpu.fluid_particles), (cpu.steps, cpu.frames, cpu.fluid_particles));
         let (c, g) = (files(&cpu_out), files(&out));
         assert!(c.len() > cpu.frames, "the frames and the series file: {:?}", c.iter().map(|f| &f.0).collect::<Vec<_>>());
@@ -890,7 +881,7 @@ fn an_unstable_run_on_the_gpu_keeps_its_frames() {
     scene.output.every_s = Some(0.01);
     for engine in engines() {
         let out = std::env::temp_dir().join(format!("coil-cuda-unstable-{}-{engine:?}", std::process::id()));
-        match coil::run::run_on(Some(engine.open()), &scene, "dam_break.toml", &run_options(&out)) {
+        match coil::run::run_on(Some(engine.open()), &scene, "dam_break.toml", &quiet_run_options(&out)) {
             Err(coil::run::RunError::Unstable(instability, summary)) => {
                 assert!(instability.dt_s > instability.stability_bound_s, "{engine:?}: {instability}");
                 assert!(summary.frames >= 1, "{engine:?}: the frame at t = 0 is kept: {summary:?}");

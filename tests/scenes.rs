@@ -168,9 +168,16 @@ fn a_short_run_writes_a_frame_series() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// The error of the shipped round jet, parsed as `jet.toml`, with its first `from` replaced by
+/// `to`.
+fn round_jet_edited(from: &str, to: &str) -> coil::scene::SceneError {
+    let good = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/round_jet.toml")).expect("scene");
+    assert!(good.contains(from), "{from}");
+    Scene::parse(&good.replacen(from, to, 1), "jet.toml").expect_err(to)
+}
+
 #[test]
 fn a_nozzle_wobbling_a_spacing_or_a_tube_outside_the_domain_is_refused() {
-    let good = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/round_jet.toml")).expect("scene");
     let cases = [
         ("wobble_m = 0.001", "wobble_m = 0.004", "inlet[0].wobble_m", "below the particle spacing"),
         ("wobble_m = 0.001", "wobble_m = -0.001", "inlet[0].wobble_m", "at least 0"),
@@ -179,8 +186,7 @@ fn a_nozzle_wobbling_a_spacing_or_a_tube_outside_the_domain_is_refused() {
         ("position_m = [0.0, 0.2, 0.0]", "position_m = [0.5, 0.2, 0.0]", "inlet[0].position_m", "outside the domain"),
     ];
     for (from, to, field, reason) in cases {
-        assert!(good.contains(from), "{from}");
-        let e = Scene::parse(&good.replacen(from, to, 1), "jet.toml").expect_err(to);
+        let e = round_jet_edited(from, to);
         assert!(e.file == "jet.toml" && e.field == field && e.reason.contains(reason), "{to}: {e}");
     }
 }
@@ -190,7 +196,6 @@ fn a_nozzle_wobbling_a_spacing_or_a_tube_outside_the_domain_is_refused() {
 /// error at its line.
 #[test]
 fn a_mistyped_field_is_named_as_set_spells_it() {
-    let good = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/round_jet.toml")).expect("scene");
     let cases = [
         ("sound_speed_m_s = ", "sound_speed_ms = ", "material.sound_speed_ms", "unknown field"),
         ("precision = \"f32\"", "precision = \"f16\"", "simulation.precision", "unknown variant `f16`"),
@@ -200,8 +205,7 @@ fn a_mistyped_field_is_named_as_set_spells_it() {
         ("[simulation]", "[simulation", "(syntax)", "table header"),
     ];
     for (from, to, field, reason) in cases {
-        assert!(good.contains(from), "{from}");
-        let e = Scene::parse(&good.replacen(from, to, 1), "jet.toml").expect_err(to);
+        let e = round_jet_edited(from, to);
         assert!(
             e.file == "jet.toml" && e.field == field && e.reason.contains(reason) && e.reason.contains("(at line"),
             "{to}: {e}"

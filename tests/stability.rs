@@ -3,23 +3,11 @@
 
 mod common;
 
-use coil::run::{run, Backend, RunError, RunOptions, Summary};
+use coil::run::{run, RunError, Summary};
 use coil::scene::Scene;
 use coil::time_step::StabilityBound;
-use std::path::{Path, PathBuf};
-
-/// A quiet CPU run writing to `out`.
-fn cpu_options(out: &Path) -> RunOptions {
-    RunOptions {
-        backend: Backend::Cpu,
-        out_dir: out.to_path_buf(),
-        precision: None,
-        quiet: true,
-        preview: false,
-        overrides: vec![],
-        overwrite: false,
-    }
-}
+use common::quiet_run_options;
+use std::path::PathBuf;
 
 /// A 0.1 m cube of fluid (spacing `spacing_m`) dropped into a 0.2 m box under gravity, with the
 /// `[material]` and `[material.viscosity]` lines given, run for `steps` steps of the Eq. (10)
@@ -97,7 +85,7 @@ max_m = [0.15, 0.15, 0.15]
 
     fn run(&self, name: &str) -> (Result<Summary, RunError>, PathBuf) {
         let out = std::env::temp_dir().join(format!("coil-stability-{name}-{}", std::process::id()));
-        let options = cpu_options(&out);
+        let options = quiet_run_options(&out);
         (run(&self.scene(), "drop.toml", &options), out)
     }
 
@@ -231,7 +219,7 @@ fn coincident_particles_get_finite_forces() {
 fn an_empty_scene_and_a_single_particle_run_cleanly() {
     let mut scene = Drop::new("nu0_m2_s = 0.01").scene();
     let out = std::env::temp_dir().join(format!("coil-stability-empty-{}", std::process::id()));
-    let options = cpu_options(&out);
+    let options = quiet_run_options(&out);
     let block = scene.fluid_blocks.pop().expect("the drop's block");
     let summary = run(&scene, "empty.toml", &options).expect("walls and no fluid run");
     assert_eq!(summary.fluid_particles, 0);

@@ -90,3 +90,16 @@ pub fn uniform(state: &mut u64) -> f64 {
     *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
     (*state >> 11) as f64 / (1u64 << 53) as f64
 }
+
+/// Options for a quiet run into `out`, on the CPU unless `run_on` is given a device.
+pub fn quiet_run_options(out: &std::path::Path) -> coil::run::RunOptions {
+    coil::run::RunOptions {
+        backend: coil::run::Backend::Cpu,
+        out_dir: out.to_path_buf(),
+        precision: None,
+        quiet: true,
+        preview: false,
+        overrides: vec![],
+        overwrite: false,
+    }
+}
