@@ -126,11 +126,11 @@ pub enum RunError {
     /// Output could not be written.
     Io(String),
     /// The run went unstable; frames written before are kept.
-    Unstable(Instability, Summary),
+    Unstable(Instability, Box<Summary>),
     /// The backend asked for is not available here (exit code 2).
     Backend(String),
     /// The device failed during the run; frames written before are kept.
-    Device(String, Summary),
+    Device(String, Box<Summary>),
 }
 
 impl fmt::Display for RunError {
@@ -184,8 +184,8 @@ pub fn run_on(device: Option<Device>, scene: &Scene, scene_file: &str, options: 
     let result = with_precision_and_model(precision, scene, Drive { scene, initial: &initial, options, device });
     (log.status, log.diagnosis, log.summary) = match &result {
         Ok(summary) => ("completed", None, Some(summary.clone())),
-        Err(RunError::Unstable(i, summary)) => ("unstable", Some(i.to_string()), Some(summary.clone())),
-        Err(RunError::Device(e, summary)) => ("failed", Some(e.clone()), Some(summary.clone())),
+        Err(RunError::Unstable(i, summary)) => ("unstable", Some(i.to_string()), Some(Summary::clone(summary))),
+        Err(RunError::Device(e, summary)) => ("failed", Some(e.clone()), Some(Summary::clone(summary))),
         Err(e) => ("failed", Some(e.to_string()), None),
     };
     log.write(&options.out_dir).map_err(|e| io_error("run log", &log_path, e))?;
@@ -446,8 +446,8 @@ fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
         }
     };
     let stopped = |stop: StepStop, s: Summary| match stop {
-        StepStop::Unstable(instability) => RunError::Unstable(instability, s),
-        StepStop::Device(e) => RunError::Device(e, s),
+        StepStop::Unstable(instability) => RunError::Unstable(instability, Box::new(s)),
+        StepStop::Device(e) => RunError::Device(e, Box::new(s)),
     };
     while state.sim().time < end * (1.0 - 1e-12) {
         let sim = state.sim();
