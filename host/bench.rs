@@ -6,6 +6,7 @@
 //! nothing waiting in between, so they are what a long run achieves per step.
 
 use crate::model::{with_precision_and_model, Model, ModelFields, WithModel};
+use crate::operation_count::{count_step_operations, StepOperations};
 use crate::run::{Device, StepStop, Stepping};
 use crate::scene::{Precision, Scene};
 use crate::scene_override::{apply, Override};
@@ -108,6 +109,10 @@ pub struct Measurement {
     pub kernels: Vec<KernelShare>,
     /// On the GPU: the step's compulsory memory traffic over the measured copy bandwidth (ms).
     pub memory_floor_ms: Option<f64>,
+    /// The floating-point operations of a step at this size, counted on the CPU backend.
+    pub operations: Option<StepOperations>,
+    /// On a GPU of known peak rates: the step's operations at those rates (ms).
+    pub arithmetic_floor_ms: Option<f64>,
 }
 
 impl Measurement {
@@ -124,7 +129,42 @@ pub struct BenchReport {
     pub gpu: Option<String>,
     /// Device-to-device copy bandwidth (bytes/s), read + write counted.
     pub gpu_bandwidth: Option<f64>,
+    /// The GPU's peak floating-point rates, where its architecture is known.
+    pub gpu_peak: Option<PeakRates>,
     pub measurements: Vec<Measurement>,
+}
+
+/// Peak floating-point rates of a GPU (operations/s, a fused multiply-add counted as two).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PeakRates {
+    pub f32: f64,
+    pub f64: f64,
+}
+
+impl PeakRates {
+    /// From the compute capability, the multiprocessor count and the peak clock (Hz): the
+    /// f32 and f64 lanes of a multiprocessor of that architecture, each doing a fused
+    /// multiply-add a cycle (CUDA C++ Programming Guide, arithmetic instruction throughput).
+    /// None for an architecture not listed.
+    pub fn of(compute_capability: (i32, i32), multiprocessors: f64, clock_hz: f64) -> Option<Self> {
+        let (f32_lanes, f64_lanes) = match compute_capability {
+            (7, 0) | (8, 0) => (64.0, 32.0),
+            (7, 5) => (64.0, 2.0),
+            (8, 6) | (8, 9) | (12, _) => (128.0, 2.0),
+            (9, 0) | (10, 0) => (128.0, 64.0),
+            _ => return None,
+        };
+        let cycle = 2.0 * multiprocessors * clock_hz;
+        Some(Self { f32: f32_lanes * cycle, f64: f64_lanes * cycle })
+    }
+
+    /// The rate of precision `p`.
+    pub fn of_precision(&self, p: Precision) -> f64 {
+        match p {
+            Precision::F32 => self.f32,
+            Precision::F64 => self.f64,
+        }
+    }
 }
 
 /// The dam break with `per_edge`^3 fluid particles.
@@ -180,6 +220,8 @@ impl WithModel for Measure<'_> {
             bytes_per_fluid_particle: sim.memory_bytes() as f64 / sim.fluid_count() as f64,
             kernels: Vec::new(),
             memory_floor_ms: None,
+            operations: None,
+            arithmetic_floor_ms: None,
         };
         match self.gpu {
             None => {
@@ -324,10 +366,12 @@ pub fn bench_on(
     }
     let gpu_name = describe_gpu(&gpu);
     let gpu_bandwidth = copy_bandwidth(&gpu)?;
+    let gpu_peak = peak_rates(&gpu);
     let mut measurements = Vec::new();
     for &size in &options.sizes {
         let scene = dam_break(size.per_edge);
         let initial = initial_particles(&scene, DAM_BREAK_FILE).map_err(|e| e.to_string())?;
+        let operations = count_step_operations(&scene, &initial).map_err(|e| format!("{}: {e}", size.label))?;
         for &precision in &options.precisions {
             for &backend in &options.backends {
                 let steps = match backend {
@@ -350,13 +394,18 @@ pub fn bench_on(
                 if returned.is_some() {
                     gpu = returned;
                 }
-                let m = result.map_err(|e| format!("{} {} {}: {e}", size.label, precision_name(precision), backend.name()))?;
+                let mut m =
+                    result.map_err(|e| format!("{} {} {}: {e}", size.label, precision_name(precision), backend.name()))?;
+                m.operations = Some(operations);
+                if backend == BenchBackend::Cuda {
+                    m.arithmetic_floor_ms = gpu_peak.map(|p| operations.floor_s(p.of_precision(precision), p.f64) * 1e3);
+                }
                 progress(&m);
                 measurements.push(m);
             }
         }
     }
-    Ok(BenchReport { cpu: describe_cpu(), gpu: gpu_name, gpu_bandwidth, measurements })
+    Ok(BenchReport { cpu: describe_cpu(), gpu: gpu_name, gpu_bandwidth, gpu_peak, measurements })
 }
 
 pub fn precision_name(p: Precision) -> &'static str {
@@ -388,6 +437,16 @@ fn copy_bandwidth(gpu: &Option<Device>) -> Result<Option<f64>, String> {
 #[cfg(not(feature = "cuda"))]
 fn copy_bandwidth(gpu: &Option<Device>) -> Result<Option<f64>, String> {
     Ok(gpu.as_ref().map(|d| match *d {}))
+}
+
+#[cfg(feature = "cuda")]
+fn peak_rates(gpu: &Option<Device>) -> Option<PeakRates> {
+    gpu.as_ref().and_then(|g| g.peak_rates())
+}
+
+#[cfg(not(feature = "cuda"))]
+fn peak_rates(gpu: &Option<Device>) -> Option<PeakRates> {
+    gpu.as_ref().map(|d| match *d {})
 }
 
 #[cfg(feature = "cuda")]

@@ -27,6 +27,9 @@ pub fn markdown(report: &BenchReport, options: &BenchOptions) -> String {
     if let Some(b) = report.gpu_bandwidth {
         let _ = writeln!(out, "- GPU device-to-device copy bandwidth: {:.0} GB/s (read + write)", b * 1e-9);
     }
+    if let Some(p) = report.gpu_peak {
+        let _ = writeln!(out, "- GPU peak rates: {:.1} TFLOP/s f32, {:.1} TFLOP/s f64", p.f32 * 1e-12, p.f64 * 1e-12);
+    }
     let _ = writeln!(
         out,
         "- Median ms per step over {} timed steps after {} warm-up steps; CPU sizes above 64K: {} timed steps \
@@ -76,27 +79,43 @@ pub fn markdown(report: &BenchReport, options: &BenchOptions) -> String {
         }
     }
 
-    let _ = writeln!(out, "\n## Memory, and the GPU against its floor\n");
+    let _ = writeln!(out, "\n## Memory, arithmetic, and the GPU against its floors\n");
     let _ = writeln!(
         out,
         "Bytes per fluid particle: all memory the run allocated (boundary particles, the grid and scratch \
-         included) over the fluid particles. The floor is the step's compulsory memory traffic (every \
+         included) over the fluid particles. The memory floor is the step's compulsory memory traffic (every \
          per-particle array each pass reads or writes, once; `bench::compulsory_bytes`) over the measured copy \
-         bandwidth.\n"
+         bandwidth. Operations: a step's floating-point operations, counted by running it on the CPU backend \
+         with a number type that counts them (`operation_count`): the physics, in the run's precision, plus the \
+         neighbor candidates' distance filter, 8 f64 operations each in both precisions. The arithmetic floor is \
+         those at the GPU's peak rates.\n"
     );
-    let _ = writeln!(out, "| size | precision | backend | B per fluid particle | floor ms | median ms | median / floor |");
-    let _ = writeln!(out, "|---|---|---|---:|---:|---:|---:|");
+    let _ = writeln!(
+        out,
+        "| size | precision | backend | B per fluid particle | G operations (physics + f64 filter) | achieved G operations/s | memory floor ms | arithmetic floor ms | median ms | median / larger floor |"
+    );
+    let _ = writeln!(out, "|---|---|---|---:|---:|---:|---:|---:|---:|---:|");
     for m in &report.measurements {
+        let floor = match (m.memory_floor_ms, m.arithmetic_floor_ms) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        };
+        let operations = m.operations.map_or("—".into(), |o| format!("{:.3} + {:.3}", o.physics * 1e-9, o.filter_f64() * 1e-9));
+        let rate =
+            m.operations.map_or("—".into(), |o| format!("{:.1}", (o.physics + o.filter_f64()) / (m.median_ms * 1e-3) * 1e-9));
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {:.0} | {} | {} | {} |",
+            "| {} | {} | {} | {:.0} | {} | {} | {} | {} | {} | {} |",
             m.size.label,
             precision_name(m.precision),
             m.backend.name(),
             m.bytes_per_fluid_particle,
+            operations,
+            rate,
             ms(m.memory_floor_ms),
+            ms(m.arithmetic_floor_ms),
             ms(Some(m.median_ms)),
-            ratio(m.memory_floor_ms.map(|f| m.median_ms / f)),
+            ratio(floor.map(|f| m.median_ms / f)),
         );
     }
 
@@ -130,13 +149,13 @@ pub fn markdown(report: &BenchReport, options: &BenchOptions) -> String {
 /// One CSV line per measurement.
 pub fn csv(report: &BenchReport) -> String {
     let mut out = String::from(
-        "size,fluid,boundary,precision,backend,steps,median_ms,p10_ms,p90_ms,particle_steps_per_s,bytes_per_fluid_particle,memory_floor_ms,paper_cpu_ms,paper_gpu_ms\n",
+        "size,fluid,boundary,precision,backend,steps,median_ms,p10_ms,p90_ms,particle_steps_per_s,bytes_per_fluid_particle,memory_floor_ms,physics_operations,filter_f64_operations,arithmetic_floor_ms,paper_cpu_ms,paper_gpu_ms\n",
     );
     let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v}"));
     for m in &report.measurements {
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             m.size.label,
             m.fluid,
             m.boundary,
@@ -149,6 +168,9 @@ pub fn csv(report: &BenchReport) -> String {
             m.particle_steps_per_s(),
             m.bytes_per_fluid_particle,
             opt(m.memory_floor_ms),
+            opt(m.operations.map(|o| o.physics)),
+            opt(m.operations.map(|o| o.filter_f64())),
+            opt(m.arithmetic_floor_ms),
             opt(m.size.paper_cpu_ms),
             m.size.paper_gpu_ms
         );

@@ -10,6 +10,7 @@ pub mod image;
 pub mod inlet;
 pub mod model;
 pub mod neighbor_grid;
+pub mod operation_count;
 pub mod output;
 pub mod parallel;
 pub mod particles;

@@ -3,8 +3,12 @@
 
 mod common;
 
-use coil::bench::{dam_break, TABLE_I};
-use coil::setup::initial_particles;
+use coil::bench::{dam_break, PeakRates, TABLE_I};
+use coil::model::{with_model, Model, WithModel};
+use coil::operation_count::{count_step_operations, counting, Counted};
+use coil::setup::{initial_particles, InitialParticles};
+use coil::simulation::Simulation;
+use coil_kernels::Real;
 use common::coil;
 
 #[test]
@@ -47,7 +51,9 @@ fn a_small_bench_writes_its_report_next_to_the_paper() {
         let median: f64 = row[6].parse().expect("median ms");
         let (p10, p90): (f64, f64) = (row[7].parse().expect("p10"), row[8].parse().expect("p90"));
         assert!(median > 0.0 && p10 <= median && median <= p90, "{row:?}");
-        assert_eq!(row[12], paper_cpu);
+        let (physics, filter): (f64, f64) = (row[12].parse().expect("physics operations"), row[13].parse().expect("filter"));
+        assert!(physics > 0.0 && filter > 0.0 && row[14].is_empty(), "{row:?}: operations counted, no GPU floor");
+        assert_eq!(row[15], paper_cpu);
     }
     let md = std::fs::read_to_string(out.join("bench.md")).expect("bench.md");
     assert!(md.contains("| 1K | 1000 |") && md.contains("| 7.200 | 1.030 | 7.0 |"), "{md}");
@@ -66,4 +72,92 @@ fn bench_input_mistakes_exit_2_and_say_why() {
         assert_eq!(o.status.code(), Some(2));
         assert!(String::from_utf8_lossy(&o.stderr).contains("--features cuda"));
     }
+}
+
+/// Positions and velocities (m, m/s) after two steps of `scene` in precision `R`.
+struct TwoSteps<'a>(&'a coil::scene::Scene, &'a InitialParticles);
+
+impl WithModel for TwoSteps<'_> {
+    type Output = Vec<f64>;
+    fn with<R: Real, M: Model<R>>(self, model: M) -> Vec<f64> {
+        let mut sim = Simulation::<R, M>::new(self.0, self.1, model);
+        for _ in 0..2 {
+            let (dt, limit) = sim.next_dt();
+            sim.step_with(dt, limit).expect("stable");
+        }
+        let p = &sim.particles;
+        let n = p.len();
+        (0..3).flat_map(|a| p.position[a][..n].iter().copied().chain(p.velocity[a][..n].iter().map(|v| v.to_f64()))).collect()
+    }
+}
+
+/// The counting number type only counts: the dam break steps with it exactly as in f64.
+#[test]
+fn a_counted_step_is_the_f64_step() {
+    let scene = dam_break(TABLE_I[0].per_edge);
+    let initial = initial_particles(&scene, "dam break").expect("valid");
+    let counted = with_model::<Counted, _>(&scene, TwoSteps(&scene, &initial));
+    let plain = with_model::<f64, _>(&scene, TwoSteps(&scene, &initial));
+    assert_eq!(counted.len(), plain.len());
+    let moved = counted.iter().zip(&plain).filter(|(c, p)| c.to_bits() != p.to_bits()).count();
+    assert_eq!(moved, 0, "{moved} of {} numbers differ", plain.len());
+}
+
+/// Every add, subtract, multiply, divide, square root, exp2 and log2 counts one; sign flips,
+/// absolute values, comparisons and conversions count none.
+#[test]
+fn counted_numbers_count_each_operation_once() {
+    let (value, ops) = counting(|| {
+        let (a, b) = (Counted(3.0), Counted(2.0));
+        let mut x = (a * b + a - b / a).sqrt();
+        x += a;
+        x -= b;
+        x *= a;
+        let y = (-x).abs().max(a).log2().exp2();
+        Counted::tally_candidates(7);
+        y.to_f64()
+    });
+    assert!((value - 3.0 * ((25.0f64 / 3.0).sqrt() + 1.0)).abs() < 1e-12, "{value}");
+    assert_eq!((ops.physics, ops.candidates), (10.0, 7.0));
+}
+
+/// Each neighbor loop tallies the particles of the cells it examines: a particle alone in an
+/// open domain examines itself once in each of the step's three neighbor passes (density,
+/// stress, acceleration); two in one cell examine each other too. The physics of two
+/// particles costs more than that of one, and the count does not depend on the threads.
+#[test]
+fn a_step_counts_its_neighbor_candidates_and_operations() {
+    let text = |block_max: f64| {
+        format!(
+            "name = \"pair\"\n[material]\nparticle_spacing_m = 0.01\n[material.viscosity]\nnu0_m2_s = 0.01\n\
+             [domain]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [0.2, 0.2, 0.2]\n[simulation]\nend_time_s = 0.1\n\
+             [[fluid_block]]\nmin_m = [0.1, 0.1, 0.1]\nmax_m = [{block_max}, 0.105, 0.105]\n"
+        )
+    };
+    let count = |block_max: f64, threads: usize| {
+        let scene = common::scene(&text(block_max));
+        let initial = initial_particles(&scene, "pair.toml").expect("valid");
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("a pool");
+        (initial.fluid.len(), pool.install(|| count_step_operations(&scene, &initial).expect("stable")))
+    };
+    let (one, single) = count(0.105, 1);
+    let (two, pair) = count(0.115, 1);
+    assert_eq!((one, two), (1, 2), "one particle, then two a spacing apart");
+    assert_eq!(single.candidates, 3.0);
+    assert_eq!(pair.candidates, 12.0);
+    assert!(pair.physics > single.physics && single.physics > 0.0, "{single:?} {pair:?}");
+    assert_eq!(count(0.115, 2).1, pair, "the same count on two threads");
+}
+
+/// The peak rates of two data-centre GPUs against NVIDIA's data sheets (non-tensor FP32 /
+/// FP64): H100 SXM5, 132 multiprocessors at 1.98 GHz, 67 / 34 TFLOP/s; A100, 108 at
+/// 1.41 GHz, 19.5 / 9.7 TFLOP/s.
+#[test]
+fn peak_rates_match_the_data_sheets() {
+    let h100 = PeakRates::of((9, 0), 132.0, 1.98e9).expect("Hopper is listed");
+    let a100 = PeakRates::of((8, 0), 108.0, 1.41e9).expect("Ampere is listed");
+    for (rate, sheet) in [(h100.f32, 67e12), (h100.f64, 34e12), (a100.f32, 19.5e12), (a100.f64, 9.7e12)] {
+        assert!((rate / sheet - 1.0).abs() < 0.02, "{rate:.3e} against {sheet:.3e}");
+    }
+    assert_eq!(PeakRates::of((3, 0), 8.0, 1e9), None, "an unlisted architecture has no peak");
 }

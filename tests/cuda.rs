@@ -473,6 +473,9 @@ fn the_bench_profiles_every_launch_of_a_gpu_step() {
         let state = (28.0 + 16.0 * real) * (m.fluid + m.boundary) as f64 / m.fluid as f64;
         assert!(m.bytes_per_fluid_particle >= state, "{r}: {} bytes per particle", m.bytes_per_fluid_particle);
         assert!(m.memory_floor_ms.is_some_and(|f| f > 0.0), "{r}: a floor from the measured copy bandwidth");
+        assert_eq!(m.operations, cpu.operations, "{r}: one count of a step's operations for both backends");
+        assert!(m.operations.is_some_and(|o| o.physics > 0.0 && o.candidates > 0.0), "{r}: {:?}", m.operations);
+        assert_eq!(m.arithmetic_floor_ms, None, "{r}: the emulated device has no peak rate");
     }
     let md = coil::bench_report::markdown(&report, &options);
     assert!(md.contains("## GPU kernels at 1K"), "{md}");

@@ -218,6 +218,19 @@ impl Gpu {
         }
     }
 
+    /// The device's peak floating-point rates, from its multiprocessors, clock and
+    /// architecture; none on the emulated device or where the driver does not say.
+    pub fn peak_rates(&self) -> Option<crate::bench::PeakRates> {
+        let Engine::Cuda(d) = &self.engine else {
+            return None;
+        };
+        let attribute = |a| d.ctx.attribute(a).ok().filter(|&v| v > 0).map(f64::from);
+        let multiprocessors = attribute(sys::CUdevice_attribute::CU_DEVICE_ATTRIBUTE_MULTIPROCESSOR_COUNT)?;
+        // The peak clock, in kHz.
+        let clock_hz = attribute(sys::CUdevice_attribute::CU_DEVICE_ATTRIBUTE_CLOCK_RATE)? * 1e3;
+        crate::bench::PeakRates::of(d.ctx.compute_capability().ok()?, multiprocessors, clock_hz)
+    }
+
     /// (free, total) bytes of device memory; none known on an emulated device of no set size.
     pub fn memory(&self) -> (usize, usize) {
         match &self.engine {

@@ -129,6 +129,7 @@ impl<T: Topology> Neighborhood<'_, T> {
                 let last = self.grid.linear_index([x_hi, y, z]) as usize;
                 let start = self.cell_start.at(first) as usize;
                 let end = self.cell_start.at(last + 1) as usize;
+                R::tally_candidates(end - start);
                 for j in start..end {
                     let dx = xi[0] - self.position.x.at(j);
                     let dy = xi[1] - self.position.y.at(j);
@@ -166,6 +167,7 @@ impl<T: Topology> Neighborhood<'_, T> {
         let mut run = |(x_lo, x_hi): (u32, u32), y: u32, z: u32| {
             let start = self.cell_start.at(self.grid.linear_index([x_lo, y, z]) as usize) as usize;
             let end = self.cell_start.at(self.grid.linear_index([x_hi, y, z]) as usize + 1) as usize;
+            R::tally_candidates(end - start);
             for j in start..end {
                 let dx = minimum_image(xi[0] - self.position.x.at(j), period[0]);
                 let dy = minimum_image(xi[1] - self.position.y.at(j), period[1]);

@@ -35,6 +35,11 @@ pub trait Real:
     fn abs(self) -> Self;
     fn is_finite(self) -> bool;
 
+    /// Notes that a neighbor loop examines `n` candidates, each filtered by its distance in
+    /// f64 (8 operations). Nothing for `f32` and `f64`; the host's operation counter counts them.
+    #[inline(always)]
+    fn tally_candidates(_n: usize) {}
+
     #[inline(always)]
     fn max(self, other: Self) -> Self {
         if self > other {
