@@ -364,9 +364,7 @@ pub fn bench_on(
     if gpu.is_none() && options.backends.contains(&BenchBackend::Cuda) {
         return Err("--backend cuda: no device was opened".into());
     }
-    let gpu_name = describe_gpu(&gpu);
-    let gpu_bandwidth = copy_bandwidth(&gpu)?;
-    let gpu_peak = peak_rates(&gpu);
+    let (gpu_name, gpu_bandwidth, gpu_peak) = gpu_facts(&gpu)?;
     let mut measurements = Vec::new();
     for &size in &options.sizes {
         let scene = dam_break(size.per_edge);
@@ -428,33 +426,18 @@ pub fn cuda_available() -> Result<(), String> {
     crate::run::open_cuda().map(drop)
 }
 
-/// The device's copy bandwidth (bytes/s), measured once for every configuration's floor.
+/// What the report says of the device, taken once for every configuration: its name, its
+/// copy bandwidth (bytes/s, measured, for the memory floor) and its peak rates (for the
+/// arithmetic floor).
+type GpuFacts = (Option<String>, Option<f64>, Option<PeakRates>);
+
 #[cfg(feature = "cuda")]
-fn copy_bandwidth(gpu: &Option<Device>) -> Result<Option<f64>, String> {
-    gpu.as_ref().map(|g| g.copy_bandwidth().map_err(|e| e.to_string())).transpose()
+fn gpu_facts(gpu: &Option<Device>) -> Result<GpuFacts, String> {
+    let Some(g) = gpu else { return Ok((None, None, None)) };
+    Ok((Some(g.describe()), Some(g.copy_bandwidth().map_err(|e| e.to_string())?), g.peak_rates()))
 }
 
 #[cfg(not(feature = "cuda"))]
-fn copy_bandwidth(gpu: &Option<Device>) -> Result<Option<f64>, String> {
-    Ok(gpu.as_ref().map(|d| match *d {}))
-}
-
-#[cfg(feature = "cuda")]
-fn peak_rates(gpu: &Option<Device>) -> Option<PeakRates> {
-    gpu.as_ref().and_then(|g| g.peak_rates())
-}
-
-#[cfg(not(feature = "cuda"))]
-fn peak_rates(gpu: &Option<Device>) -> Option<PeakRates> {
-    gpu.as_ref().map(|d| match *d {})
-}
-
-#[cfg(feature = "cuda")]
-fn describe_gpu(gpu: &Option<Device>) -> Option<String> {
-    gpu.as_ref().map(|g| g.describe())
-}
-
-#[cfg(not(feature = "cuda"))]
-fn describe_gpu(gpu: &Option<Device>) -> Option<String> {
-    gpu.as_ref().map(|d| match *d {})
+fn gpu_facts(gpu: &Option<Device>) -> Result<GpuFacts, String> {
+    Ok(gpu.as_ref().map_or((None, None, None), |d| match *d {}))
 }
