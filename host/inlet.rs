@@ -191,6 +191,12 @@ impl Inlet {
         }
     }
 
+    /// Whether a layer is due that `room` more particles cannot take: the run's fluid capacity
+    /// has stopped this jet.
+    pub fn starved(&self, room: usize) -> bool {
+        self.travelled >= self.layer_distance && self.layer.len() > room
+    }
+
     /// Advances the jet by `dt` from time `t` and appends every layer now due, while whole
     /// layers fit in `budget` more particles. Returns how many particles were added.
     pub fn inject<R: Real>(&mut self, t: f64, dt: f64, budget: usize, next_id: &mut u32, p: &mut Particles<R>) -> usize {

@@ -13,6 +13,7 @@ pub mod neighbor_grid;
 pub mod operation_count;
 pub mod output;
 pub mod parallel;
+pub mod particle_limit;
 pub mod particles;
 pub mod plot;
 pub mod preview;

@@ -107,12 +107,21 @@ impl<R: Real> Particles<R> {
 
     /// Bytes allocated per particle of capacity.
     pub fn bytes_per_particle(&self) -> usize {
+        Self::bytes_per_particle_with(ModelFields {
+            stress: self.stress.is_some(),
+            viscosity: self.viscosity.is_some(),
+            velocity_gradient: self.velocity_gradient.is_some(),
+        })
+    }
+
+    /// Bytes each particle takes in a run whose model allocates `fields`.
+    pub fn bytes_per_particle_with(fields: ModelFields) -> usize {
         let r = std::mem::size_of::<R>();
         let position = 3 * 8;
         let velocities_and_acceleration = 3 * 3 * r;
-        let stress = if self.stress.is_some() { 6 * r } else { 0 };
-        let viscosity = if self.viscosity.is_some() { r } else { 0 };
-        let gradient = if self.velocity_gradient.is_some() { 9 * r } else { 0 };
+        let stress = if fields.stress { 6 * r } else { 0 };
+        let viscosity = if fields.viscosity { r } else { 0 };
+        let gradient = if fields.velocity_gradient { 9 * r } else { 0 };
         let scratch = 8 + r + 4;
         position + velocities_and_acceleration + 4 + r + stress + viscosity + gradient + scratch
     }

@@ -103,6 +103,9 @@ pub struct Summary {
     pub max_mach: f64,
     pub removed: u64,
     pub frames: usize,
+    /// When (s) the fluid capacity (`simulation.max_fluid_particles`) stopped the inlets, and
+    /// that capacity.
+    pub capacity_reached: Option<(f64, usize)>,
 }
 
 impl fmt::Display for Summary {
@@ -115,7 +118,14 @@ impl fmt::Display for Summary {
         writeln!(f, "max |rho-rho0|/rho0    {:.3e}", self.max_density_error)?;
         writeln!(f, "max speed              {:.4} m/s (Mach {:.3})", self.max_speed_m_s, self.max_mach)?;
         writeln!(f, "removed (left domain)  {}", self.removed)?;
-        write!(f, "frames                 {}", self.frames)
+        write!(f, "frames                 {}", self.frames)?;
+        if let Some((t, capacity)) = self.capacity_reached {
+            write!(
+                f,
+                "\ninlets stopped         at t = {t:.4} s: the fluid capacity of {capacity} particles (simulation.max_fluid_particles) was full"
+            )?;
+        }
+        Ok(())
     }
 }
 
@@ -339,9 +349,10 @@ impl Progress {
     fn report<R: Real, M: Model<R>>(&mut self, sim: &Simulation<R, M>, end: f64, wall: Duration) {
         let rate = sim.steps as f64 / wall.as_secs_f64().max(1e-9);
         let line = format!(
-            "t = {:.4}/{end} s | {rate:.0} steps/s | {} fluid particles | dt {:.2e} s ({})",
+            "t = {:.4}/{end} s | {rate:.0} steps/s | {} fluid particles{} | dt {:.2e} s ({})",
             sim.time,
             sim.fluid_count(),
+            if sim.capacity_reached_at.is_some() { " (capacity full: inlets wait)" } else { "" },
             sim.last_dt,
             sim.last_limit
         );
@@ -443,6 +454,7 @@ fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
             max_mach: max_speed / scene.material.sound_speed_m_s,
             removed: sim.removed,
             frames,
+            capacity_reached: sim.capacity_reached_at.map(|t| (t, sim.fluid_capacity())),
         }
     };
     let stopped = |stop: StepStop, s: Summary| match stop {

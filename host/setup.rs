@@ -1,5 +1,6 @@
 //! Initial particles of a scene: fluid blocks and boundary walls on the particle lattice.
 
+use crate::particle_limit::ParticleLimit;
 use crate::scene::{Boundary, DensityKernel, Scene, SceneError};
 use coil_kernels::smoothing::SmoothingKernels;
 use coil_kernels::{Real, Vec3};
@@ -36,6 +37,28 @@ fn lattice(
             }
         }
     }
+}
+
+/// Lattice points in a box of `n` cells.
+fn points(n: [i64; 3]) -> f64 {
+    n.iter().map(|&c| c.max(0) as f64).product()
+}
+
+/// Refuses a shape (`field`) of up to `points` particles that could take the particles made so
+/// far past `limit`, before any of it is made.
+fn room(p: &InitialParticles, points: f64, limit: &ParticleLimit, field: String, file: &str) -> Result<(), SceneError> {
+    let before = p.boundary.len() + p.fluid.len();
+    if before as f64 + points <= limit.most {
+        return Ok(());
+    }
+    Err(SceneError {
+        file: file.into(),
+        field,
+        reason: format!(
+            "its lattice holds up to {points:.3e} particles, with the {before} before it more than the run can hold: {}; coarsen material.particle_spacing_m or make it smaller",
+            limit.why
+        ),
+    })
 }
 
 /// Gives the fluid particles added since `before` their initial velocity and refuses them if
@@ -76,8 +99,14 @@ pub fn boundary_layers(spacing: f64, support_radius: f64) -> i64 {
     (2 * per_support - 2).max(per_support)
 }
 
-/// Builds the particles of `scene` and checks they fit the domain and do not overlap.
+/// Builds the particles of `scene` and checks they fit the domain, do not overlap, and leave
+/// room for the fluid capacity on this machine.
 pub fn initial_particles(scene: &Scene, file: &str) -> Result<InitialParticles, SceneError> {
+    initial_particles_within(scene, file, &ParticleLimit::of(scene))
+}
+
+/// [`initial_particles`] within `limit`.
+pub fn initial_particles_within(scene: &Scene, file: &str, limit: &ParticleLimit) -> Result<InitialParticles, SceneError> {
     let s = scene.material.particle_spacing_m;
     let layers = boundary_layers(s, scene.support_radius());
     let mut p = InitialParticles::default();
@@ -93,6 +122,7 @@ pub fn initial_particles(scene: &Scene, file: &str) -> Result<InitialParticles, 
                 let reach = |a: usize| if periodic[a] { 0 } else { layers };
                 let lo = [0, 1, 2].map(|a| -reach(a));
                 let hi = [n[0] + reach(0), if open_top { n[1] } else { n[1] + reach(1) }, n[2] + reach(2)];
+                room(&p, points([0, 1, 2].map(|a| hi[a] - lo[a])) - points(n), limit, format!("boundary[{k}]"), file)?;
                 lattice(min_m, s, lo, hi, |c, _| (0..3).any(|a| c[a] < 0 || c[a] >= n[a]), &mut p.boundary);
                 // Through the nearest point of the interior: a face, an edge or a corner.
                 let interior_max = [0, 1, 2].map(|a| min_m[a] + n[a] as f64 * s);
@@ -106,6 +136,7 @@ pub fn initial_particles(scene: &Scene, file: &str) -> Result<InitialParticles, 
                 let max_xz = max_xz_m.unwrap_or([d.max_m[0], d.max_m[2]]);
                 let n = [cells(max_xz[0] - min_xz[0], s), cells(max_xz[1] - min_xz[1], s)];
                 let min = [min_xz[0], height_m - layers as f64 * s, min_xz[1]];
+                room(&p, points([n[0], layers, n[1]]), limit, format!("boundary[{k}]"), file)?;
                 lattice(min, s, [0, 0, 0], [n[0], layers, n[1]], |_, _| true, &mut p.boundary);
                 let top_max = [min_xz[0] + n[0] as f64 * s, min_xz[1] + n[1] as f64 * s];
                 p.boundary_mirror.extend(p.boundary[before..].iter().map(|x| {
@@ -125,6 +156,7 @@ pub fn initial_particles(scene: &Scene, file: &str) -> Result<InitialParticles, 
     for (k, b) in scene.fluid_blocks.iter().enumerate() {
         let before = p.fluid.len();
         let n = [0, 1, 2].map(|a| cells(b.max_m[a] - b.min_m[a], s));
+        room(&p, points(n), limit, format!("fluid_block[{k}]"), file)?;
         lattice(b.min_m, s, [0; 3], n, |_, _| true, &mut p.fluid);
         settle(&mut p, before, b.velocity_m_s, s, format!("fluid_block[{k}]"), file)?;
     }
@@ -133,6 +165,7 @@ pub fn initial_particles(scene: &Scene, file: &str) -> Result<InitialParticles, 
         let (c, big, small) = (t.centre_m, t.major_radius_m, t.minor_radius_m);
         let min = [c[0] - big - small, c[1] - small, c[2] - big - small];
         let n = [cells(2.0 * (big + small), s), cells(2.0 * small, s), cells(2.0 * (big + small), s)];
+        room(&p, points(n), limit, format!("fluid_torus[{k}]"), file)?;
         lattice(
             min,
             s,
@@ -152,6 +185,7 @@ pub fn initial_particles(scene: &Scene, file: &str) -> Result<InitialParticles, 
         let (b, r) = (c.base_centre_m, c.radius_m);
         let min = [b[0] - r, b[1], b[2] - r];
         let n = [cells(2.0 * r, s), cells(c.height_m, s), cells(2.0 * r, s)];
+        room(&p, points(n), limit, format!("fluid_cylinder[{k}]"), file)?;
         lattice(min, s, [0; 3], n, |_, x| (x[0] - b[0]).powi(2) + (x[2] - b[2]).powi(2) <= r * r, &mut p.fluid);
         settle(&mut p, before, c.velocity_m_s, s, format!("fluid_cylinder[{k}]"), file)?;
     }
@@ -160,6 +194,12 @@ pub fn initial_particles(scene: &Scene, file: &str) -> Result<InitialParticles, 
             return Err(err(
                 "simulation.max_fluid_particles".into(),
                 format!("{budget} is below the {} particles of the initial fluid", p.fluid.len()),
+            ));
+        }
+        if (p.boundary.len() + budget) as f64 > limit.most {
+            return Err(err(
+                "simulation.max_fluid_particles".into(),
+                format!("{budget} fluid and {} wall particles are more than the run can hold: {}", p.boundary.len(), limit.why),
             ));
         }
     }

@@ -79,6 +79,9 @@ pub struct Simulation<R: Real, M: Model<R>> {
     /// Fluid particles injected by inlets.
     pub injected: u64,
     fluid_capacity: usize,
+    /// When (s) an inlet first had a layer due that the fluid capacity could not take; from
+    /// then on the jets run only as particles leave the domain.
+    pub capacity_reached_at: Option<f64>,
     fluid_count: usize,
     pub(crate) next_id: u32,
     /// Largest fluid speed after the last step (m/s), which the velocity CFL reads.
@@ -150,6 +153,7 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             removed: 0,
             injected: 0,
             fluid_capacity,
+            capacity_reached_at: None,
             fluid_count: initial.fluid.len(),
             next_id: (boundary_count + initial.fluid.len()) as u32,
             diagnostics: Diagnostics::default(),
@@ -316,9 +320,15 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
     }
 
     /// Counts particles an inlet just added.
+    /// Counts the particles an injection added, and notes when the inlets first found the
+    /// fluid capacity full.
     pub(crate) fn count_injected(&mut self, added: usize) {
         self.fluid_count += added;
         self.injected += added as u64;
+        let room = self.fluid_capacity - self.fluid_count;
+        if self.capacity_reached_at.is_none() && self.inlets.iter().any(|inlet| inlet.starved(room)) {
+            self.capacity_reached_at = Some(self.time);
+        }
     }
 
     /// Counts particles the sort dropped for leaving the domain.

@@ -96,6 +96,12 @@ fn inlet_stops_at_the_particle_budget_and_moving_nozzle_follows_waypoints() {
     }
     let layer = inlet.layer_size();
     assert_eq!(sim.fluid_count(), 500 / layer * layer, "whole layers up to the budget");
+    // The first layer is due at t = 0, so the first that does not fit, number 500 / layer from
+    // 0, is due that many layer periods later; the step that finds it so is noted.
+    let period = layer as f64 / sim.inlets()[0].particles_per_second();
+    let due = (500 / layer) as f64 * period;
+    let reached = sim.capacity_reached_at.expect("the budget stopped the inlet");
+    assert!((reached - due).abs() <= sim.last_dt + 1e-12, "noted at {reached} s, the layer was due at {due} s");
 }
 
 #[test]
@@ -109,6 +115,7 @@ fn particles_leaving_the_domain_are_removed_and_counted() {
         sim.step().expect("stable");
     }
     assert!(sim.removed > 0);
+    assert_eq!(sim.capacity_reached_at, None, "the capacity of 200 000 never stopped the inlet");
     let p = &sim.particles;
     assert!((0..p.len()).all(|i| p.position[1][i] >= -0.2), "no particle below the domain is kept");
 }

@@ -191,6 +191,42 @@ fn a_nozzle_wobbling_a_spacing_or_a_tube_outside_the_domain_is_refused() {
     }
 }
 
+/// A capacity or a shape too large for the machine is refused before anything is allocated,
+/// with the numbers: the ids limit is the same everywhere; the memory limit is that of a 1 GiB
+/// machine, on which the f32 round jet's 108 + 56 bytes a particle (arrays, and setup and grid)
+/// allow 6.5e6 particles.
+#[test]
+fn a_run_too_large_for_the_machine_is_refused_before_it_allocates() {
+    use coil::particle_limit::ParticleLimit;
+    use coil::setup::initial_particles_within;
+    let scene = Scene::parse(
+        &std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/round_jet.toml")).expect("scene"),
+        "jet.toml",
+    )
+    .expect("round jet");
+    let huge = |capacity: usize| {
+        let mut s = scene.clone();
+        s.simulation.max_fluid_particles = Some(capacity);
+        s
+    };
+    let e = initial_particles_within(&huge(5_000_000_000), "jet.toml", &ParticleLimit::with_memory(&scene, None))
+        .expect_err("beyond 32-bit ids");
+    assert!(e.field == "simulation.max_fluid_particles" && e.reason.contains("32-bit"), "{e}");
+
+    let gib = ParticleLimit::with_memory(&scene, Some(1 << 30));
+    assert!((gib.most - (1u64 << 30) as f64 / 164.0).abs() < 1.0, "{gib:?}");
+    initial_particles_within(&huge(6_500_000), "jet.toml", &gib).expect("6.5e6 particles fit 1 GiB");
+    let e = initial_particles_within(&huge(6_600_000), "jet.toml", &gib).expect_err("6.6e6 do not");
+    assert!(e.field == "simulation.max_fluid_particles" && e.reason.contains("1.0 GiB"), "{e}");
+
+    let mut block = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml")).expect("scene");
+    block = block.replace("particle_spacing_m = 0.02", "particle_spacing_m = 0.002");
+    let fine = Scene::parse(&block, "dam.toml").expect("8e6 particles at 2 mm");
+    let e = initial_particles_within(&fine, "dam.toml", &ParticleLimit::with_memory(&fine, Some(1 << 30)))
+        .expect_err("a 0.4 m cube at 2 mm holds 8e6 particles");
+    assert!(e.field == "fluid_block[0]" && e.reason.contains("8.000e6") && e.reason.contains("particle_spacing_m"), "{e}");
+}
+
 /// Mistakes serde finds by position (an unknown field, a wrong type, an unknown variant, a
 /// missing field) name the field as `--set` spells it, with the line; broken TOML is a syntax
 /// error at its line.

@@ -429,10 +429,10 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         let host = &mut self.host;
         let room = (host.fluid_capacity() - host.fluid_count()).min(self.staged.capacity());
         let added = inject(&mut host.inlets, host.time, dt, room, &mut host.next_id, &mut self.staged);
+        host.count_injected(added);
         if added == 0 {
             return Ok(());
         }
-        host.count_injected(added);
         let (gpu, d, s) = (&mut self.gpu, &mut self.device, &self.staged);
         let count = ByValue(d.count.view(1));
         let k = ByValue(added as u32);
