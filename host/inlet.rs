@@ -133,6 +133,12 @@ impl Inlet {
         self.layer.len()
     }
 
+    /// Distance (m) the jet travels between layers: the layer's mass over rho0 times the
+    /// nozzle's area.
+    pub fn layer_distance(&self) -> f64 {
+        self.layer_distance
+    }
+
     /// Particles injected per second while the jet runs.
     pub fn particles_per_second(&self) -> f64 {
         self.layer.len() as f64 * self.speed / self.layer_distance

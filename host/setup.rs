@@ -1,5 +1,6 @@
 //! Initial particles of a scene: fluid blocks and boundary walls on the particle lattice.
 
+use crate::inlet::Inlet;
 use crate::particle_limit::ParticleLimit;
 use crate::scene::{Boundary, DensityKernel, Scene, SceneError};
 use coil_kernels::smoothing::SmoothingKernels;
@@ -38,6 +39,12 @@ fn lattice(
         }
     }
 }
+
+/// Layer distances (in spacings) that keep a jet a continuum: farther apart its particles
+/// fall as a string of beads, closer they start compressed to several times rho0. A nozzle
+/// narrower than a spacing holds a single lattice point and lands outside.
+const MIN_LAYER_DISTANCE: f64 = 0.5;
+const MAX_LAYER_DISTANCE: f64 = 2.0;
 
 /// Lattice points in a box of `n` cells.
 fn points(n: [i64; 3]) -> f64 {
@@ -188,6 +195,20 @@ pub fn initial_particles_within(scene: &Scene, file: &str, limit: &ParticleLimit
         room(&p, points(n), limit, format!("fluid_cylinder[{k}]"), file)?;
         lattice(min, s, [0; 3], n, |_, x| (x[0] - b[0]).powi(2) + (x[2] - b[2]).powi(2) <= r * r, &mut p.fluid);
         settle(&mut p, before, c.velocity_m_s, s, format!("fluid_cylinder[{k}]"), file)?;
+    }
+    let mass = calibrated_mass(scene.material.rest_density_kg_m3, s, scene.support_radius(), scene.material.density_kernel);
+    for (k, config) in scene.inlets.iter().enumerate() {
+        let inlet = Inlet::new(config, s, scene.support_radius(), mass, scene.material.rest_density_kg_m3);
+        let apart = inlet.layer_distance() / s;
+        if !(MIN_LAYER_DISTANCE..=MAX_LAYER_DISTANCE).contains(&apart) {
+            return Err(err(
+                format!("inlet[{k}].nozzle"),
+                format!(
+                    "at spacing {s} m its section holds {} lattice point(s), so to deliver rho0 A U its layers would be {apart:.2} spacings apart ({MIN_LAYER_DISTANCE} to {MAX_LAYER_DISTANCE} make a continuous jet); widen it to a radius (circle), or a width and depth (rectangle), of at least a spacing, or refine material.particle_spacing_m",
+                    inlet.layer_size()
+                ),
+            ));
+        }
     }
     if let Some(budget) = scene.simulation.max_fluid_particles {
         if budget < p.fluid.len() {

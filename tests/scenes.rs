@@ -189,6 +189,21 @@ fn a_nozzle_wobbling_a_spacing_or_a_tube_outside_the_domain_is_refused() {
         let e = round_jet_edited(from, to);
         assert!(e.file == "jet.toml" && e.field == field && e.reason.contains(reason), "{to}: {e}");
     }
+    // Below a radius of one spacing (4 mm) the section holds one lattice point, and rho0 A U
+    // puts the layers 1 / (pi (r/s)^2) spacings apart: 0.8 at 2.5 mm, 0.41 at 3.5 mm, 504 at
+    // 0.1 mm. A jet is refused outside 0.5 to 2.
+    let good = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/round_jet.toml")).expect("scene");
+    for (radius, apart) in
+        [("0.0025", None), ("0.0035", Some("0.41 spacings")), ("0.0001", Some("504.37 spacings")), ("0.004", None)]
+    {
+        let text = good.replacen("radius_m = 0.01", &format!("radius_m = {radius}"), 1);
+        let scene = Scene::parse(&text, "jet.toml").expect("a positive radius parses");
+        match (initial_particles(&scene, "jet.toml"), apart) {
+            (Ok(_), None) => {}
+            (Err(e), Some(apart)) => assert!(e.field == "inlet[0].nozzle" && e.reason.contains(apart), "{radius}: {e}"),
+            (result, _) => panic!("radius {radius} m: {:?}", result.err()),
+        }
+    }
 }
 
 /// A capacity or a shape too large for the machine is refused before anything is allocated,
