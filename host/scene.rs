@@ -693,6 +693,18 @@ impl Scene {
                     }
                 }
             }
+            if let Boundary::Plate { height_m, min_xz_m, max_xz_m } = *b {
+                if !height_m.is_finite() {
+                    return err(&format!("boundary[{k}].height_m"), format!("must be a finite number, got {height_m}"));
+                }
+                let (lo, hi) = (min_xz_m.unwrap_or([d.min_m[0], d.min_m[2]]), max_xz_m.unwrap_or([d.max_m[0], d.max_m[2]]));
+                if let Some(a) = (0..2).find(|&a| !(lo[a] < hi[a])) {
+                    return err(
+                        &format!("boundary[{k}].max_xz_m"),
+                        format!("must exceed min_xz_m along {} ({} against {})", ["x", "z"][a], hi[a], lo[a]),
+                    );
+                }
+            }
         }
         for (k, inlet) in self.inlets.iter().enumerate() {
             let field = |f: &str| format!("inlet[{k}].{f}");

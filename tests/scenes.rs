@@ -206,6 +206,19 @@ fn a_nozzle_wobbling_a_spacing_or_a_tube_outside_the_domain_is_refused() {
     }
 }
 
+#[test]
+fn a_plate_of_no_extent_or_at_no_height_is_refused() {
+    let cases = [
+        ("height_m = 0.0", "height_m = inf", "boundary[0].height_m", "finite"),
+        ("height_m = 0.0", "height_m = 0.0\nmin_xz_m = [0.05, 0.0]\nmax_xz_m = [-0.05, 0.01]", "boundary[0].max_xz_m", "along x"),
+        ("height_m = 0.0", "height_m = 0.0\nmax_xz_m = [0.05, -0.08]", "boundary[0].max_xz_m", "along z"),
+    ];
+    for (from, to, field, reason) in cases {
+        let e = round_jet_edited(from, to);
+        assert!(e.field == field && e.reason.contains(reason), "{to}: {e}");
+    }
+}
+
 /// A capacity or a shape too large for the machine is refused before anything is allocated,
 /// with the numbers: the ids limit is the same everywhere; the memory limit is that of a 1 GiB
 /// machine, on which the f32 round jet's 108 + 56 bytes a particle (arrays, and setup and grid)
