@@ -24,6 +24,9 @@ pub struct Report {
     pub final_fluid: usize,
     pub spacing_m: f64,
     pub support_radius_m: f64,
+    /// The fastest the fluid can move without viscosity (m/s), and over c.
+    pub speed_bound_m_s: f64,
+    pub mach_bound: f64,
     pub bound: StabilityBound,
     /// dt the run will take (s) and what limits it; the velocity CFL may lower it further when a
     /// particle moves faster than c.
@@ -54,6 +57,17 @@ impl fmt::Display for Report {
         writeln!(f, "spacing, h         {} m, {} m", self.spacing_m, self.support_radius_m)?;
         writeln!(
             f,
+            "speed, Mach        at most {:.3} m/s (the fastest start, plus free fall through the domain), Mach {:.3}",
+            self.speed_bound_m_s, self.mach_bound
+        )?;
+        if self.mach_bound > 1.0 {
+            writeln!(
+                f,
+                "warning            above Mach 1 falling fluid compresses far past its rest density and can pass through walls; raise material.sound_speed_m_s (Mach 0.1 or less for quantitative runs)"
+            )?;
+        }
+        writeln!(
+            f,
             "Eq. (10) bound     {:.3e} s: acoustic 0.1 h/c = {:.3e} s, viscous 0.1 h^2/(8 nu0) = {:.3e} s",
             self.bound.dt().0,
             self.bound.acoustic_s,
@@ -77,6 +91,19 @@ impl fmt::Display for Report {
             self.particle_steps
         )
     }
+}
+
+/// The fastest a fluid particle can move (m/s) when all the height it can fall is turned into
+/// speed: the fastest jet or initial speed U, and free fall g through the domain's extent
+/// along gravity, sqrt(U^2 + 2 g extent). Viscosity only slows it.
+fn speed_bound(scene: &Scene, initial: &InitialParticles) -> f64 {
+    let g = scene.material.gravity_m_s2;
+    let d = &scene.domain;
+    let g_norm = g.iter().map(|c| c * c).sum::<f64>().sqrt();
+    let drop = if g_norm > 0.0 { (0..3).map(|a| g[a].abs() / g_norm * (d.max_m[a] - d.min_m[a])).sum::<f64>() } else { 0.0 };
+    let jet = scene.inlets.iter().map(|i| i.speed_m_s).fold(0.0, f64::max);
+    let start = initial.fluid_velocity.iter().map(|v| v.iter().map(|c| c * c).sum::<f64>().sqrt()).fold(jet, f64::max);
+    (start * start + 2.0 * g_norm * drop).sqrt()
 }
 
 fn human(s: f64) -> String {
@@ -200,6 +227,7 @@ pub fn check(scene: &Scene, file: &str, precision: Option<Precision>, calibratio
     } else {
         (scene, &initial)
     };
+    let speed_bound = speed_bound(scene, &initial);
     let work = Calibrate { scene: calibrated_scene, initial: calibrated_initial, wall: calibration };
     let (seconds_per_particle_step, calibration_steps) = with_precision_and_model(precision, calibrated_scene, work);
     Ok(Report {
@@ -210,6 +238,8 @@ pub fn check(scene: &Scene, file: &str, precision: Option<Precision>, calibratio
         final_fluid: fluid_at(end, initial.fluid.len(), capacity, inlets) as usize,
         spacing_m: scene.material.particle_spacing_m,
         support_radius_m: scene.support_radius(),
+        speed_bound_m_s: speed_bound,
+        mach_bound: speed_bound / scene.material.sound_speed_m_s,
         bound,
         dt_s: dt,
         limit,

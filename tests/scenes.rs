@@ -358,6 +358,15 @@ fn check_reports_counts_the_equation_10_bound_and_a_calibrated_estimate() {
     assert!(r.initial_fluid == 0 && (r.inlet_rate - rate).abs() < 1e-9 * rate, "{} vs {rate}", r.inlet_rate);
     assert_eq!(r.final_fluid, ((rate * 0.8) as usize).min(4200));
     assert!(r.limit == Limit::Viscous && (r.dt_s - 8e-6).abs() < 1e-18, "{r}");
+    // U = 1 m/s from the nozzle, and free fall through the domain's 0.25 m height at 9.8 m/s^2.
+    let fastest = (1.0f64 + 2.0 * 9.8 * 0.25).sqrt();
+    assert!((r.speed_bound_m_s - fastest).abs() < 1e-12 && (r.mach_bound - fastest / 20.0).abs() < 1e-12, "{r}");
+    assert!(!r.to_string().contains("warning"), "{r}");
+    // The paper's c = sqrt(1.5) m/s puts it at Mach 2.
+    let mut paper = jet.clone();
+    paper.material.sound_speed_m_s = 1.5f64.sqrt();
+    let r = check(&paper, "round_jet.toml", None, std::time::Duration::ZERO).expect("valid");
+    assert!(r.mach_bound > 1.9 && r.to_string().contains("warning            above Mach 1"), "{r}");
 }
 
 #[test]
