@@ -24,9 +24,10 @@ pub struct Report {
     pub final_fluid: usize,
     pub spacing_m: f64,
     pub support_radius_m: f64,
-    /// The fastest the fluid can move without viscosity (m/s), and over c.
-    pub speed_bound_m_s: f64,
-    pub mach_bound: f64,
+    /// The fastest the fluid can move without viscosity (m/s), and over c; `None` where
+    /// gravity runs along a periodic axis, which it can fall along forever.
+    pub speed_bound_m_s: Option<f64>,
+    pub mach_bound: Option<f64>,
     pub bound: StabilityBound,
     /// dt the run will take (s) and what limits it; the velocity CFL may lower it further when a
     /// particle moves faster than c.
@@ -55,12 +56,14 @@ impl fmt::Display for Report {
         }
         writeln!(f, "capacity           {} fluid (simulation.max_fluid_particles)", self.fluid_capacity)?;
         writeln!(f, "spacing, h         {} m, {} m", self.spacing_m, self.support_radius_m)?;
-        writeln!(
-            f,
-            "speed, Mach        at most {:.3} m/s (the fastest start, plus free fall through the domain), Mach {:.3}",
-            self.speed_bound_m_s, self.mach_bound
-        )?;
-        if self.mach_bound > 1.0 {
+        match (self.speed_bound_m_s, self.mach_bound) {
+            (Some(speed), Some(mach)) => writeln!(
+                f,
+                "speed, Mach        at most {speed:.3} m/s (the fastest start, plus free fall through the domain), Mach {mach:.3}"
+            )?,
+            _ => writeln!(f, "speed, Mach        bounded only by viscosity: gravity runs along a periodic axis")?,
+        }
+        if self.mach_bound.is_some_and(|mach| mach > 1.0) {
             writeln!(
                 f,
                 "warning            above Mach 1 falling fluid compresses far past its rest density and can pass through walls; raise material.sound_speed_m_s (Mach 0.1 or less for quantitative runs)"
@@ -95,15 +98,19 @@ impl fmt::Display for Report {
 
 /// The fastest a fluid particle can move (m/s) when all the height it can fall is turned into
 /// speed: the fastest jet or initial speed U, and free fall g through the domain's extent
-/// along gravity, sqrt(U^2 + 2 g extent). Viscosity only slows it.
-fn speed_bound(scene: &Scene, initial: &InitialParticles) -> f64 {
+/// along gravity, sqrt(U^2 + 2 g extent). Viscosity only slows it. `None` where gravity runs
+/// along a periodic axis.
+fn speed_bound(scene: &Scene, initial: &InitialParticles) -> Option<f64> {
     let g = scene.material.gravity_m_s2;
     let d = &scene.domain;
+    if (0..3).any(|a| d.periodic[a] && g[a] != 0.0) {
+        return None;
+    }
     let g_norm = g.iter().map(|c| c * c).sum::<f64>().sqrt();
     let drop = if g_norm > 0.0 { (0..3).map(|a| g[a].abs() / g_norm * (d.max_m[a] - d.min_m[a])).sum::<f64>() } else { 0.0 };
     let jet = scene.inlets.iter().map(|i| i.speed_m_s).fold(0.0, f64::max);
     let start = initial.fluid_velocity.iter().map(|v| v.iter().map(|c| c * c).sum::<f64>().sqrt()).fold(jet, f64::max);
-    (start * start + 2.0 * g_norm * drop).sqrt()
+    Some((start * start + 2.0 * g_norm * drop).sqrt())
 }
 
 fn human(s: f64) -> String {
@@ -239,7 +246,7 @@ pub fn check(scene: &Scene, file: &str, precision: Option<Precision>, calibratio
         spacing_m: scene.material.particle_spacing_m,
         support_radius_m: scene.support_radius(),
         speed_bound_m_s: speed_bound,
-        mach_bound: speed_bound / scene.material.sound_speed_m_s,
+        mach_bound: speed_bound.map(|v| v / scene.material.sound_speed_m_s),
         bound,
         dt_s: dt,
         limit,
