@@ -239,6 +239,61 @@ fn nozzle_tube_contains_its_bore_upstream_of_the_exit() {
     assert!(!rectangle.contains([0.0, 1.05, 0.011]), "beyond the half depth");
 }
 
+/// Around random points, points on cell faces and corners, and particles a hair inside or
+/// outside h across the diagonals, the open loop finds exactly what a search of every particle
+/// finds, in cell order.
+#[test]
+fn the_open_neighbor_loop_finds_exactly_the_particles_within_h_in_cell_order() {
+    use coil::neighbor_grid::NeighborGrid;
+    use coil::particles::{ModelFields, Particles};
+    let h = 0.1;
+    let (min, max) = ([0.0, 0.0, 0.0], [0.6, 0.6, 0.6]);
+    let mut state = 11u64;
+    let mut points: Vec<[f64; 3]> =
+        (0..1500).map(|_| [0, 1, 2].map(|a| min[a] + uniform(&mut state) * (max[a] - min[a]))).collect();
+    // Corners and faces of the cells around (0.3, 0.3, 0.3), exactly and a hair off, and for
+    // each corner particles at h (1 -+ 1e-12) along the diagonals into the cells beyond.
+    let mut queries = Vec::new();
+    for offset in [0.0, 1e-13, -1e-13, 0.05] {
+        queries.push([0.3 + offset, 0.3, 0.3]);
+        queries.push([0.3 + offset, 0.3 + offset, 0.3 + offset]);
+        queries.push([0.3 - offset, 0.3 + offset, 0.25]);
+    }
+    for &q in &queries.clone() {
+        for shrink in [1.0 - 1e-12, 1.0 + 1e-12] {
+            for (sx, sy, sz) in [(1.0, 1.0, 1.0), (-1.0, 1.0, -1.0), (1.0, 0.0, 1.0), (0.0, -1.0, 0.0)] {
+                let norm = ((sx * sx + sy * sy + sz * sz) as f64).sqrt();
+                let step = h * shrink / norm;
+                points.push([q[0] + sx * step, q[1] + sy * step, q[2] + sz * step]);
+            }
+        }
+    }
+    let n = points.len();
+    let mut grid = NeighborGrid::new(min, max, h, [false; 3], n);
+    let mut p = Particles::<f64>::with_capacity(n, ModelFields::default());
+    for (id, &x) in points.iter().enumerate() {
+        p.push(id as u32, x, [0.0; 3]);
+    }
+    assert_eq!(grid.sort(&mut p), 0);
+    let nb = grid.neighborhood(p.position_view(), Open);
+    let sorted: Vec<[f64; 3]> = (0..n).map(|j| [0, 1, 2].map(|a| p.position[a][j])).collect();
+    queries.extend(sorted.iter().step_by(3));
+    for x in queries {
+        let mut found = Vec::new();
+        nb.for_each_particle_near(x, h * h, |j, _, r2: f64| found.push((j, r2)));
+        // Every particle within h; sorted by cell, so in index order they are the loop's order
+        // when the loop visits cells in index order.
+        let expected: Vec<(usize, f64)> = (0..n)
+            .filter_map(|j| {
+                let d = [0, 1, 2].map(|a| x[a] - sorted[j][a]);
+                let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                (r2 < h * h).then_some((j, r2))
+            })
+            .collect();
+        assert_eq!(found, expected, "around {x:?}");
+    }
+}
+
 #[test]
 fn the_periodic_neighbor_loop_finds_exactly_the_nearest_images_within_h() {
     use coil::neighbor_grid::NeighborGrid;
