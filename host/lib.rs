@@ -8,6 +8,7 @@ pub mod cuda;
 pub mod frame;
 pub mod image;
 pub mod inlet;
+pub mod interrupt;
 pub mod model;
 pub mod neighbor_grid;
 pub mod operation_count;

@@ -360,6 +360,7 @@ fn main() -> ExitCode {
                 overrides: set,
                 overwrite,
             };
+            coil::interrupt::watch();
             match run(&parsed, &file, &options) {
                 Ok(summary) => {
                     println!("{summary}");
@@ -372,6 +373,7 @@ fn main() -> ExitCode {
                         RunError::Scene(_) | RunError::Backend(_) => 2,
                         RunError::Io(_) | RunError::Device(..) => 1,
                         RunError::Unstable(..) => 3,
+                        RunError::Interrupted(_) => 130,
                     })
                 }
             }

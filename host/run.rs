@@ -141,6 +141,8 @@ pub enum RunError {
     Backend(String),
     /// The device failed during the run; frames written before are kept.
     Device(String, Box<Summary>),
+    /// Ctrl-C or SIGTERM stopped the run after a step; frames written before are kept.
+    Interrupted(Box<Summary>),
 }
 
 impl fmt::Display for RunError {
@@ -153,6 +155,11 @@ impl fmt::Display for RunError {
             }
             RunError::Backend(e) => f.write_str(e),
             RunError::Device(e, s) => write!(f, "{e}\nFrames written before it are kept ({}).", s.frames),
+            RunError::Interrupted(s) => write!(
+                f,
+                "interrupted at step {} (t = {:.6} s); the {} frames written before are kept",
+                s.steps, s.simulated_s, s.frames
+            ),
         }
     }
 }
@@ -196,6 +203,7 @@ pub fn run_on(device: Option<Device>, scene: &Scene, scene_file: &str, options: 
         Ok(summary) => ("completed", None, Some(summary.clone())),
         Err(RunError::Unstable(i, summary)) => ("unstable", Some(i.to_string()), Some(Summary::clone(summary))),
         Err(RunError::Device(e, summary)) => ("failed", Some(e.clone()), Some(Summary::clone(summary))),
+        Err(e @ RunError::Interrupted(summary)) => ("interrupted", Some(e.to_string()), Some(Summary::clone(summary))),
         Err(e) => ("failed", Some(e.to_string()), None),
     };
     log.write(&options.out_dir).map_err(|e| io_error("run log", &log_path, e))?;
@@ -491,6 +499,14 @@ fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
         if !options.quiet && last_report.elapsed() >= Duration::from_millis(200) {
             last_report = Instant::now();
             progress.report(state.sim(), end, started.elapsed());
+        }
+        if crate::interrupt::requested() {
+            progress.finish();
+            if let Err(stop) = state.sync() {
+                return Err(stopped(stop, summary(state.sim(), frames, particle_steps, max_density_error, max_speed)));
+            }
+            let s = summary(state.sim(), frames, particle_steps, max_density_error, max_speed);
+            return Err(RunError::Interrupted(Box::new(s)));
         }
     }
     progress.finish();

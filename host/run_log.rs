@@ -25,7 +25,8 @@ pub struct RunLog<'a> {
     pub backend: &'static str,
     pub precision: Precision,
     pub threads: usize,
-    /// "running", "completed", "unstable" or "failed" (output could not be written).
+    /// "running", "completed", "unstable", "interrupted" (Ctrl-C or SIGTERM) or "failed"
+    /// (output could not be written, or the device failed).
     pub status: &'static str,
     /// Why the run stopped early, if it did.
     pub diagnosis: Option<String>,

@@ -262,7 +262,7 @@ fn the_open_neighbor_loop_finds_exactly_the_particles_within_h_in_cell_order() {
     for &q in &queries.clone() {
         for shrink in [1.0 - 1e-12, 1.0 + 1e-12] {
             for (sx, sy, sz) in [(1.0, 1.0, 1.0), (-1.0, 1.0, -1.0), (1.0, 0.0, 1.0), (0.0, -1.0, 0.0)] {
-                let norm = ((sx * sx + sy * sy + sz * sz) as f64).sqrt();
+                let norm: f64 = (sx * sx + sy * sy + sz * sz).sqrt();
                 let step = h * shrink / norm;
                 points.push([q[0] + sx * step, q[1] + sy * step, q[2] + sz * step]);
             }

@@ -129,6 +129,43 @@ fn a_run_killed_mid_write_leaves_only_whole_frames() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Ctrl-C (SIGINT) stops a run after its step: exit code 130, the log says "interrupted" with
+/// the summary, and every frame written is kept and listed.
+#[cfg(unix)]
+#[test]
+fn an_interrupted_run_logs_its_summary_and_keeps_its_frames() {
+    let dir = std::env::temp_dir().join(format!("coil-interrupt-{}", std::process::id()));
+    let out = dir.join("out");
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_coil"))
+        .args(["run", scene.to_str().expect("utf-8"), "--quiet", "--set", "output.every_steps=5"])
+        .args(["--out", out.to_str().expect("utf-8")])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("coil starts");
+    let started = std::time::Instant::now();
+    while !out.join("frame_000003.vtu").is_file() && started.elapsed() < std::time::Duration::from_secs(60) {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let sent = std::process::Command::new("kill").args(["-s", "INT", &child.id().to_string()]).status().expect("kill runs");
+    assert!(sent.success());
+    let ended = child.wait_with_output().expect("reaped");
+    let stderr = String::from_utf8_lossy(&ended.stderr);
+    assert_eq!(ended.status.code(), Some(130), "{stderr}");
+    assert!(stderr.contains("interrupted at step"), "{stderr}");
+    let log: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("log")).expect("whole JSON");
+    assert_eq!(log["status"], "interrupted");
+    let frames = log["summary"]["frames"].as_u64().expect("a summary with its frames");
+    let on_disk = std::fs::read_dir(&out)
+        .expect("out")
+        .filter(|e| e.as_ref().is_ok_and(|e| e.file_name().to_string_lossy().starts_with("frame_")))
+        .count() as u64;
+    let pvd = std::fs::read_to_string(out.join("dam_break.pvd")).expect("series");
+    assert!(frames >= 4 && on_disk == frames && pvd.matches("<DataSet").count() as u64 == frames, "{frames} {on_disk} {pvd}");
+    assert!(log["summary"]["simulated_s"].as_f64().expect("time") < 1.0, "stopped before the end");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn frames_also_as_binary_ply_and_splashsurf_xyz() {
     let dir = std::env::temp_dir().join(format!("coil-formats-{}", std::process::id()));

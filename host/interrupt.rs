@@ -1,0 +1,30 @@
+//! Ctrl-C (SIGINT) or SIGTERM during `coil run`: the run stops after the step it is in, logs
+//! itself as "interrupted" with its summary, and keeps every frame it wrote. A second signal
+//! ends the process at once, as if nothing had been installed.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+static REQUESTED: AtomicBool = AtomicBool::new(false);
+
+/// Whether a stop was asked for since [`watch`].
+pub fn requested() -> bool {
+    REQUESTED.load(Ordering::Relaxed)
+}
+
+/// Turns SIGINT and SIGTERM into a request to stop (on Unix; elsewhere they end the process as
+/// before).
+pub fn watch() {
+    #[cfg(unix)]
+    {
+        extern "C" fn on_signal(signal: libc::c_int) {
+            REQUESTED.store(true, Ordering::Relaxed);
+            // SAFETY: signal() is async-signal-safe; restoring the default makes a second
+            // signal end the process.
+            unsafe { libc::signal(signal, libc::SIG_DFL) };
+        }
+        for signal in [libc::SIGINT, libc::SIGTERM] {
+            // SAFETY: the handler only stores to an atomic and calls signal().
+            unsafe { libc::signal(signal, on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t) };
+        }
+    }
+}
