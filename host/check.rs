@@ -4,7 +4,7 @@
 use crate::inlet::Inlet;
 use crate::model::{with_precision_and_model, Model, WithModel};
 use crate::scene::{Boundary, Domain, FluidBlock, Precision, Scene, SceneError};
-use crate::setup::{initial_particles, InitialParticles};
+use crate::setup::{fastest_start_speed, initial_particles, InitialParticles};
 use crate::simulation::Simulation;
 use crate::time_step::{Limit, StabilityBound, TimeStepper};
 use coil_kernels::Real;
@@ -108,8 +108,7 @@ fn speed_bound(scene: &Scene, initial: &InitialParticles) -> Option<f64> {
     }
     let g_norm = g.iter().map(|c| c * c).sum::<f64>().sqrt();
     let drop = if g_norm > 0.0 { (0..3).map(|a| g[a].abs() / g_norm * (d.max_m[a] - d.min_m[a])).sum::<f64>() } else { 0.0 };
-    let jet = scene.inlets.iter().map(|i| i.speed_m_s).fold(0.0, f64::max);
-    let start = initial.fluid_velocity.iter().map(|v| v.iter().map(|c| c * c).sum::<f64>().sqrt()).fold(jet, f64::max);
+    let start = fastest_start_speed(scene, initial);
     Some((start * start + 2.0 * g_norm * drop).sqrt())
 }
 

@@ -149,11 +149,6 @@ impl Inlet {
         (self.start, self.stop)
     }
 
-    /// Jet speed (m/s).
-    pub fn speed(&self) -> f64 {
-        self.speed
-    }
-
     /// Nozzle centre (m) and velocity (m/s) at time `t` (s).
     pub fn nozzle(&self, t: f64) -> ([f64; 3], [f64; 3]) {
         match &self.motion {

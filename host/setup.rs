@@ -106,6 +106,12 @@ pub fn boundary_layers(spacing: f64, support_radius: f64) -> i64 {
     (2 * per_support - 2).max(per_support)
 }
 
+/// The fastest the fluid starts (m/s): the fastest jet, or the fastest initial velocity.
+pub fn fastest_start_speed(scene: &Scene, initial: &InitialParticles) -> f64 {
+    let jet = scene.inlets.iter().map(|i| i.speed_m_s).fold(0.0, f64::max);
+    initial.fluid_velocity.iter().map(|v| v.iter().map(|c| c * c).sum::<f64>().sqrt()).fold(jet, f64::max)
+}
+
 /// Builds the particles of `scene` and checks they fit the domain, do not overlap, and leave
 /// room for the fluid capacity on this machine.
 pub fn initial_particles(scene: &Scene, file: &str) -> Result<InitialParticles, SceneError> {

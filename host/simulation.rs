@@ -7,7 +7,7 @@ use crate::neighbor_grid::NeighborGrid;
 use crate::parallel::launch;
 use crate::particles::{mat3_view_mut, stress_view_mut, vec3_view, vec3_view_mut, view_mut, Particles};
 use crate::scene::{DensityKernel, Scene, Walls};
-use crate::setup::{calibrated_kernels, calibrated_mass, InitialParticles};
+use crate::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, InitialParticles};
 use crate::time_step::{Limit, StabilityBound, TimeStepper};
 use coil_kernels::density::{density_pass, DensityArgs, Poly6, Spiky};
 use coil_kernels::diagnostics::{range_figures, DiagnosticsArgs, StateFigures};
@@ -136,10 +136,8 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         let d = &scene.domain;
         let diagonal = (0..3).map(|a| (d.max_m[a] - d.min_m[a]).powi(2)).sum::<f64>().sqrt();
         let g_norm = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
-        let jet = inlets.iter().map(Inlet::speed).fold(0.0, f64::max);
-        let initial_speed =
-            initial.fluid_velocity.iter().map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()).fold(0.0, f64::max);
-        let runaway_speed = 2.0 * ((2.0 * g_norm * diagonal).sqrt() + jet.max(initial_speed)) + mat.sound_speed_m_s;
+        let start_speed = fastest_start_speed(scene, initial);
+        let runaway_speed = 2.0 * ((2.0 * g_norm * diagonal).sqrt() + start_speed) + mat.sound_speed_m_s;
         let mut sim = Self {
             particles,
             grid: NeighborGrid::new(d.min_m, d.max_m, h, d.periodic, boundary_count + fluid_capacity),
@@ -165,7 +163,7 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             density_kernel: mat.density_kernel,
         };
         sim.sort_and_density();
-        sim.diagnostics.max_speed = jet.max(initial_speed);
+        sim.diagnostics.max_speed = start_speed;
         sim
     }
 

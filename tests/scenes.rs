@@ -168,12 +168,26 @@ fn a_short_run_writes_a_frame_series() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// The shipped round jet's TOML.
+fn round_jet_text() -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/round_jet.toml")).expect("scene")
+}
+
 /// The error of the shipped round jet, parsed as `jet.toml`, with its first `from` replaced by
 /// `to`.
 fn round_jet_edited(from: &str, to: &str) -> coil::scene::SceneError {
-    let good = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/round_jet.toml")).expect("scene");
+    let good = round_jet_text();
     assert!(good.contains(from), "{from}");
     Scene::parse(&good.replacen(from, to, 1), "jet.toml").expect_err(to)
+}
+
+/// Each `(from, to, field, reason)` edit of the round jet is refused in `jet.toml`, naming
+/// `field`, with `reason` in the message.
+fn round_jet_edits_are_refused(cases: &[(&str, &str, &str, &str)]) {
+    for &(from, to, field, reason) in cases {
+        let e = round_jet_edited(from, to);
+        assert!(e.file == "jet.toml" && e.field == field && e.reason.contains(reason), "{to}: {e}");
+    }
 }
 
 #[test]
@@ -185,14 +199,11 @@ fn a_nozzle_wobbling_a_spacing_or_a_tube_outside_the_domain_is_refused() {
         ("position_m = [0.0, 0.2, 0.0]", "position_m = [0.0, 0.225, 0.0]", "inlet[0].position_m", "tube"),
         ("position_m = [0.0, 0.2, 0.0]", "position_m = [0.5, 0.2, 0.0]", "inlet[0].position_m", "outside the domain"),
     ];
-    for (from, to, field, reason) in cases {
-        let e = round_jet_edited(from, to);
-        assert!(e.file == "jet.toml" && e.field == field && e.reason.contains(reason), "{to}: {e}");
-    }
+    round_jet_edits_are_refused(&cases);
     // Below a radius of one spacing (4 mm) the section holds one lattice point, and rho0 A U
     // puts the layers 1 / (pi (r/s)^2) spacings apart: 0.8 at 2.5 mm, 0.41 at 3.5 mm, 504 at
     // 0.1 mm. A jet is refused outside 0.5 to 2.
-    let good = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/round_jet.toml")).expect("scene");
+    let good = round_jet_text();
     for (radius, apart) in
         [("0.0025", None), ("0.0035", Some("0.41 spacings")), ("0.0001", Some("504.37 spacings")), ("0.004", None)]
     {
@@ -213,10 +224,7 @@ fn a_plate_of_no_extent_or_at_no_height_is_refused() {
         ("height_m = 0.0", "height_m = 0.0\nmin_xz_m = [0.05, 0.0]\nmax_xz_m = [-0.05, 0.01]", "boundary[0].max_xz_m", "along x"),
         ("height_m = 0.0", "height_m = 0.0\nmax_xz_m = [0.05, -0.08]", "boundary[0].max_xz_m", "along z"),
     ];
-    for (from, to, field, reason) in cases {
-        let e = round_jet_edited(from, to);
-        assert!(e.field == field && e.reason.contains(reason), "{to}: {e}");
-    }
+    round_jet_edits_are_refused(&cases);
 }
 
 /// A capacity or a shape too large for the machine is refused before anything is allocated,
@@ -227,11 +235,7 @@ fn a_plate_of_no_extent_or_at_no_height_is_refused() {
 fn a_run_too_large_for_the_machine_is_refused_before_it_allocates() {
     use coil::particle_limit::ParticleLimit;
     use coil::setup::initial_particles_within;
-    let scene = Scene::parse(
-        &std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/round_jet.toml")).expect("scene"),
-        "jet.toml",
-    )
-    .expect("round jet");
+    let scene = Scene::parse(&round_jet_text(), "jet.toml").expect("round jet");
     let huge = |capacity: usize| {
         let mut s = scene.clone();
         s.simulation.max_fluid_particles = Some(capacity);
