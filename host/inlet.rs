@@ -192,6 +192,18 @@ impl Inlet {
         }
     }
 
+    /// How far the newest layer has travelled (m) and how many layers the jet has injected: all
+    /// of its state that a run changes.
+    pub fn progress(&self) -> (f64, u64) {
+        (self.travelled, self.layers)
+    }
+
+    /// Sets the state [`Inlet::progress`] gave, to resume a run.
+    pub(crate) fn set_progress(&mut self, travelled: f64, layers: u64) {
+        self.travelled = travelled;
+        self.layers = layers;
+    }
+
     /// Whether a layer is due that `room` more particles cannot take: the run's fluid capacity
     /// has stopped this jet.
     pub fn starved(&self, room: usize) -> bool {

@@ -2,18 +2,15 @@
 //! itself as "interrupted" with its summary, and keeps every frame it wrote. A second signal
 //! ends the process at once, as if nothing had been installed.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
+#[cfg(unix)]
+use std::sync::atomic::Ordering;
 
 static REQUESTED: AtomicBool = AtomicBool::new(false);
 
-/// Whether a stop was asked for since [`watch`].
-pub fn requested() -> bool {
-    REQUESTED.load(Ordering::Relaxed)
-}
-
 /// Turns SIGINT and SIGTERM into a request to stop (on Unix; elsewhere they end the process as
-/// before).
-pub fn watch() {
+/// before): the flag returned, for `RunOptions::stop`.
+pub fn watch() -> &'static AtomicBool {
     #[cfg(unix)]
     {
         extern "C" fn on_signal(signal: libc::c_int) {
@@ -27,4 +24,5 @@ pub fn watch() {
             unsafe { libc::signal(signal, on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t) };
         }
     }
+    &REQUESTED
 }

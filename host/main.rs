@@ -7,7 +7,7 @@ use coil::check::check;
 use coil::output::vtu_read::read_frame;
 use coil::output::write_atomically;
 use coil::preview::{frame_path, render_frame, Coloring, View};
-use coil::run::{run, Backend, RunError, RunOptions};
+use coil::run::{resume, run, Backend, ResumeOptions, RunError, RunOptions, Summary};
 use coil::scene::{Precision, Scene};
 use coil::scene_override::Override;
 use std::path::{Path, PathBuf};
@@ -58,6 +58,30 @@ enum Command {
         /// else there). Without it such a folder is refused, so that no run is lost by mistake.
         #[arg(long)]
         overwrite: bool,
+    },
+    /// Continue a run that stopped (Ctrl-C, a kill, a crash, a lost machine) from its checkpoint,
+    /// the latest frame or where Ctrl-C stopped it, into the same folder: the frames come out
+    /// as the run would have written them without the stop. With --end-time, run a finished
+    /// run further.
+    Resume {
+        /// The run's output folder (it holds run.json and checkpoint.bin).
+        dir: PathBuf,
+        /// Run to this simulated time (s) instead of the scene's end time.
+        #[arg(long, value_name = "SECONDS")]
+        end_time: Option<f64>,
+        /// Where the physics runs, as for `run`. The same backend as before gives the frames of
+        /// an unstopped run bit for bit; another gives the same physics in another rounding.
+        #[arg(long, value_enum, default_value = "auto")]
+        backend: BackendArg,
+        /// Worker threads [default: all cores].
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Print only the summary.
+        #[arg(long)]
+        quiet: bool,
+        /// Also write each frame as a PNG next to it, as for `run`.
+        #[arg(long)]
+        preview: bool,
     },
     /// Render a frame to a PNG: orthographic, coloured by viscosity (as the paper's figures) or
     /// speed, with a colour bar.
@@ -178,6 +202,16 @@ enum BackendArg {
     Auto,
     Cpu,
     Cuda,
+}
+
+impl BackendArg {
+    fn backend(self) -> Backend {
+        match self {
+            BackendArg::Auto => Backend::Auto,
+            BackendArg::Cpu => Backend::Cpu,
+            BackendArg::Cuda => Backend::Cuda,
+        }
+    }
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -348,35 +382,56 @@ fn main() -> ExitCode {
                 }
             };
             let options = RunOptions {
-                backend: match backend {
-                    BackendArg::Auto => Backend::Auto,
-                    BackendArg::Cpu => Backend::Cpu,
-                    BackendArg::Cuda => Backend::Cuda,
-                },
+                backend: backend.backend(),
                 out_dir: out.unwrap_or_else(|| PathBuf::from("out").join(&parsed.name)),
                 precision: precision.map(PrecisionArg::precision),
                 quiet,
                 preview,
                 overrides: set,
                 overwrite,
+                stop: Some(coil::interrupt::watch()),
             };
-            coil::interrupt::watch();
-            match run(&parsed, &file, &options) {
-                Ok(summary) => {
-                    println!("{summary}");
-                    println!("frames in {} (open {}.pvd in ParaView)", options.out_dir.display(), parsed.name);
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::from(match e {
-                        RunError::Scene(_) | RunError::Backend(_) => 2,
-                        RunError::Io(_) | RunError::Device(..) => 1,
-                        RunError::Unstable(..) => 3,
-                        RunError::Interrupted(_) => 130,
-                    })
-                }
+            finish_run(run(&parsed, &file, &options), &options.out_dir, &parsed.name)
+        }
+        Command::Resume { dir, end_time, backend, threads, quiet, preview } => {
+            if let Err(e) = set_threads(threads) {
+                eprintln!("error: {e}");
+                return ExitCode::from(2);
             }
+            let options = ResumeOptions {
+                backend: backend.backend(),
+                quiet,
+                preview,
+                end_time_s: end_time,
+                stop: Some(coil::interrupt::watch()),
+            };
+            let result = resume(&dir, &options);
+            let name = coil::scene::Scene::load(&dir.join("run.json")).map(|s| s.name).unwrap_or_default();
+            finish_run(result, &dir, &name)
+        }
+    }
+}
+
+/// Prints how a run or a resumed run ended, and its exit code: 0 done, 2 bad input, 1 output
+/// or device failure, 3 unstable, 130 interrupted.
+fn finish_run(result: Result<Summary, RunError>, out_dir: &Path, name: &str) -> ExitCode {
+    match result {
+        Ok(summary) => {
+            println!("{summary}");
+            println!("frames in {} (open {name}.pvd in ParaView)", out_dir.display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            if matches!(e, RunError::Interrupted(_)) {
+                eprintln!("`coil resume {}` continues it", out_dir.display());
+            }
+            ExitCode::from(match e {
+                RunError::Scene(_) | RunError::Backend(_) => 2,
+                RunError::Io(_) | RunError::Device(..) => 1,
+                RunError::Unstable(..) => 3,
+                RunError::Interrupted(_) => 130,
+            })
         }
     }
 }

@@ -1,12 +1,13 @@
 //! `coil run`: a scene from t = 0 to its end time, on the CPU or a CUDA device, writing frames
 //! as it goes.
 
+use crate::checkpoint::{self, Checkpoint};
 use crate::frame::Frame;
 use crate::model::{with_precision_and_model, Model, WithModel};
 use crate::output::vtu::{encode, Field, Series};
 use crate::output::write_atomically;
 use crate::preview::{own_range, render, speeds, Coloring, View};
-use crate::run_log::{resolved, RunLog};
+use crate::run_log::{resolved, Resumed, RunLog};
 use crate::scene::{FrameFormat, Precision, Scene, SceneError};
 use crate::setup::{initial_particles, InitialParticles};
 use crate::simulation::{Instability, Simulation};
@@ -15,7 +16,8 @@ use coil_kernels::Real;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt;
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 /// Pixels per panel of `--preview` pictures.
@@ -86,6 +88,9 @@ pub struct RunOptions {
     pub overrides: Vec<String>,
     /// Replace an earlier run's files in `out_dir`; without it such a folder is refused.
     pub overwrite: bool,
+    /// Once set (by Ctrl-C through `interrupt::watch`, or by a program driving the run), the run
+    /// stops after its step, checkpointed for `coil resume`.
+    pub stop: Option<&'static AtomicBool>,
 }
 
 /// What a run did, printed at its end.
@@ -173,8 +178,32 @@ pub fn run(scene: &Scene, scene_file: &str, options: &RunOptions) -> Result<Summ
 /// [`run`] on a device already opened (the emulated one, in tests), or on the CPU for `None`;
 /// `options.backend` is not consulted.
 pub fn run_on(device: Option<Device>, scene: &Scene, scene_file: &str, options: &RunOptions) -> Result<Summary, RunError> {
+    execute(device, scene, scene_file, options, None)
+}
+
+/// A run taken up again from its checkpoint.
+struct Resumption {
+    checkpoint: Checkpoint,
+    /// Where it was resumed before, from its `run.json`.
+    earlier: Vec<Resumed>,
+}
+
+/// Runs `scene` from t = 0, or from `resumption`'s checkpoint into the folder that holds it.
+fn execute(
+    device: Option<Device>,
+    scene: &Scene,
+    scene_file: &str,
+    options: &RunOptions,
+    resumption: Option<Resumption>,
+) -> Result<Summary, RunError> {
+    let precision = options.precision.unwrap_or(scene.simulation.precision);
+    let mut scene = scene.clone();
+    scene.simulation.precision = precision;
+    let scene = &scene;
     let initial = initial_particles(scene, scene_file).map_err(RunError::Scene)?;
-    clear_earlier_run(scene_file, options)?;
+    if resumption.is_none() {
+        clear_earlier_run(scene_file, options)?;
+    }
     std::fs::create_dir_all(&options.out_dir).map_err(|e| {
         RunError::Scene(SceneError {
             file: scene_file.into(),
@@ -182,7 +211,10 @@ pub fn run_on(device: Option<Device>, scene: &Scene, scene_file: &str, options: 
             reason: format!("output folder {} cannot be created: {e}", options.out_dir.display()),
         })
     })?;
-    let precision = options.precision.unwrap_or(scene.simulation.precision);
+    let mut resumed = resumption.as_ref().map(|r| r.earlier.clone()).unwrap_or_default();
+    if let Some(r) = &resumption {
+        resumed.push(Resumed { step: r.checkpoint.steps, time_s: r.checkpoint.time });
+    }
     let mut log = RunLog {
         coil_version: env!("CARGO_PKG_VERSION"),
         scene_file,
@@ -192,13 +224,14 @@ pub fn run_on(device: Option<Device>, scene: &Scene, scene_file: &str, options: 
         threads: rayon::current_num_threads(),
         status: "running",
         diagnosis: None,
+        resumed,
         summary: None,
         scene: resolved(scene),
     };
-    log.scene.simulation.precision = precision;
     let log_path = options.out_dir.join("run.json");
     log.write(&options.out_dir).map_err(|e| io_error("run log", &log_path, e))?;
-    let result = with_precision_and_model(precision, scene, Drive { scene, initial: &initial, options, device });
+    let checkpoint = resumption.as_ref().map(|r| &r.checkpoint);
+    let result = with_precision_and_model(precision, scene, Drive { scene, initial: &initial, options, device, checkpoint });
     (log.status, log.diagnosis, log.summary) = match &result {
         Ok(summary) => ("completed", None, Some(summary.clone())),
         Err(RunError::Unstable(i, summary)) => ("unstable", Some(i.to_string()), Some(Summary::clone(summary))),
@@ -208,6 +241,98 @@ pub fn run_on(device: Option<Device>, scene: &Scene, scene_file: &str, options: 
     };
     log.write(&options.out_dir).map_err(|e| io_error("run log", &log_path, e))?;
     result
+}
+
+/// What `coil resume` may change: where the run goes on, how it reports, and how far it goes.
+#[derive(Debug, Clone)]
+pub struct ResumeOptions {
+    pub backend: Backend,
+    pub quiet: bool,
+    pub preview: bool,
+    /// A new end time (s), later than the checkpoint's, to run a finished run further.
+    pub end_time_s: Option<f64>,
+    /// As `RunOptions::stop`.
+    pub stop: Option<&'static AtomicBool>,
+}
+
+/// `coil resume DIR`: takes up the run in `dir` from its checkpoint (the latest frame, or where
+/// Ctrl-C stopped it) and runs it to its end time, as `coil run` would have without the stop.
+pub fn resume(dir: &Path, options: &ResumeOptions) -> Result<Summary, RunError> {
+    let device = open_device(options.backend, options.quiet).map_err(RunError::Backend)?;
+    resume_on(device, dir, options)
+}
+
+/// [`resume`] on a device already opened, or on the CPU for `None`.
+pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) -> Result<Summary, RunError> {
+    let log_path = dir.join("run.json");
+    let bad = |file: &Path, field: &str, reason: String| {
+        RunError::Scene(SceneError { file: file.display().to_string(), field: field.into(), reason })
+    };
+    let text = std::fs::read_to_string(&log_path).map_err(|e| {
+        bad(&log_path, "(file)", format!("cannot be read ({e}): {} is not the output folder of a coil run", dir.display()))
+    })?;
+    let log: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(&log_path, "(syntax)", e.to_string()))?;
+    let mut scene = Scene::load(&log_path).map_err(RunError::Scene)?;
+    let checkpoint_path = dir.join(checkpoint::FILE_NAME);
+    let checkpoint = Checkpoint::read(&checkpoint_path).map_err(|e| bad(&checkpoint_path, "(file)", e))?;
+    if checkpoint.fingerprint != checkpoint::fingerprint(&scene) {
+        return Err(bad(
+            &checkpoint_path,
+            "(file)",
+            format!("was taken from another scene than the one {} logs (edited since the run?)", log_path.display()),
+        ));
+    }
+    match options.end_time_s {
+        Some(end) if !(end > checkpoint.time) || !end.is_finite() => {
+            return Err(bad(
+                &log_path,
+                "--end-time",
+                format!("must be later than the checkpoint's t = {:.6} s, got {end}", checkpoint.time),
+            ));
+        }
+        Some(end) => scene.simulation.end_time_s = end,
+        None if checkpoint.time >= scene.simulation.end_time_s * (1.0 - 1e-12) => {
+            return Err(bad(
+                &log_path,
+                "--end-time",
+                format!(
+                    "the run reached its end time t = {} s; pass --end-time with a later time to run it further",
+                    scene.simulation.end_time_s
+                ),
+            ));
+        }
+        None => {}
+    }
+    let scene_file = log["scene_file"].as_str().unwrap_or_default().to_string();
+    let overrides = log["overrides"].as_array().map(|a| a.iter().filter_map(|o| o.as_str().map(String::from)).collect());
+    let earlier = serde_json::from_value(log["resumed"].clone()).unwrap_or_default();
+    remove_frames_from(dir, checkpoint.tally.frame_times.len())?;
+    let run_options = RunOptions {
+        backend: options.backend,
+        out_dir: dir.to_path_buf(),
+        precision: None,
+        quiet: options.quiet,
+        preview: options.preview,
+        overrides: overrides.unwrap_or_default(),
+        overwrite: false,
+        stop: options.stop,
+    };
+    execute(device, &scene, &scene_file, &run_options, Some(Resumption { checkpoint, earlier }))
+}
+
+/// Removes the frames numbered `first` and later: written after the checkpoint by a run that
+/// was then killed, they will be written again, and must not linger if the resumed run stops
+/// before them.
+fn remove_frames_from(dir: &Path, first: usize) -> Result<(), RunError> {
+    let files = crate::output::earlier_run_files(dir).map_err(|e| io_error("output folder", dir, e))?;
+    for file in files {
+        let name = file.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+        let number = name.strip_prefix("frame_").and_then(|rest| rest.get(..6)).and_then(|n| n.parse::<usize>().ok());
+        if number.is_some_and(|k| k >= first) {
+            std::fs::remove_file(&file).map_err(|e| io_error("a frame past the checkpoint", &file, e))?;
+        }
+    }
+    Ok(())
 }
 
 /// Refuses an output folder that holds an earlier run, whose frames the new run would
@@ -246,14 +371,29 @@ struct Drive<'a> {
     initial: &'a InitialParticles,
     options: &'a RunOptions,
     device: Option<Device>,
+    /// Where a resumed run starts.
+    checkpoint: Option<&'a Checkpoint>,
 }
 
 impl WithModel for Drive<'_> {
     type Output = Result<Summary, RunError>;
     fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
-        let sim = Simulation::<R, M>::new(self.scene, self.initial, model);
+        let mut sim = Simulation::<R, M>::new(self.scene, self.initial, model);
+        let tally = match self.checkpoint {
+            None => None,
+            Some(c) => {
+                c.restore(&mut sim).map_err(|reason| {
+                    RunError::Scene(SceneError {
+                        file: self.options.out_dir.join(checkpoint::FILE_NAME).display().to_string(),
+                        field: "(file)".into(),
+                        reason,
+                    })
+                })?;
+                Some(c.tally.clone())
+            }
+        };
         match self.device {
-            None => drive(sim, self.scene, self.initial, self.options),
+            None => drive(sim, self.scene, self.initial, self.options, tally),
             #[cfg(feature = "cuda")]
             Some(gpu) => {
                 let sim = crate::cuda::GpuSimulation::new(sim, gpu).map_err(|e| match e {
@@ -268,7 +408,7 @@ impl WithModel for Drive<'_> {
                     let per_particle = bytes / sim.host.particles.capacity().max(1);
                     eprintln!("device memory: {:.1} MiB ({per_particle} B per particle)", bytes as f64 / (1 << 20) as f64);
                 }
-                drive(sim, self.scene, self.initial, self.options)
+                drive(sim, self.scene, self.initial, self.options, tally)
             }
             #[cfg(not(feature = "cuda"))]
             Some(d) => match d {},
@@ -292,6 +432,10 @@ pub trait Stepping<R: Real, M: Model<R>> {
     fn sync(&mut self) -> Result<(), StepStop>;
     /// Particles the last step moved, boundary included.
     fn particle_count(&self) -> usize;
+    /// Whether the host knows all the state the next step reads (a device's figures and
+    /// counts come back every few steps): where a stop may checkpoint the run, so that it
+    /// resumes as if it had never stopped.
+    fn settled(&self) -> bool;
 }
 
 impl<R: Real, M: Model<R>> Stepping<R, M> for Simulation<R, M> {
@@ -306,6 +450,9 @@ impl<R: Real, M: Model<R>> Stepping<R, M> for Simulation<R, M> {
     }
     fn particle_count(&self) -> usize {
         self.particles.len()
+    }
+    fn settled(&self) -> bool {
+        true
     }
 }
 
@@ -322,6 +469,9 @@ impl<R: Real, M: Model<R>> Stepping<R, M> for crate::cuda::GpuSimulation<R, M> {
     }
     fn particle_count(&self) -> usize {
         self.particle_bound()
+    }
+    fn settled(&self) -> bool {
+        self.host.steps.is_multiple_of(self.check_every)
     }
 }
 
@@ -340,10 +490,13 @@ impl From<crate::cuda::GpuStepError> for StepStop {
 struct Progress {
     bar: Option<ProgressBar>,
     last_line: Instant,
+    /// Time (s) and steps where this process took the run up, which rates and ETA count from.
+    start_time: f64,
+    start_steps: u64,
 }
 
 impl Progress {
-    fn new(quiet: bool) -> Self {
+    fn new(quiet: bool, start_time: f64, start_steps: u64) -> Self {
         let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
             let bar = ProgressBar::new(1000);
             bar.set_style(
@@ -351,11 +504,11 @@ impl Progress {
             );
             bar
         });
-        Self { bar, last_line: Instant::now() }
+        Self { bar, last_line: Instant::now(), start_time, start_steps }
     }
 
     fn report<R: Real, M: Model<R>>(&mut self, sim: &Simulation<R, M>, end: f64, wall: Duration) {
-        let rate = sim.steps as f64 / wall.as_secs_f64().max(1e-9);
+        let rate = (sim.steps - self.start_steps) as f64 / wall.as_secs_f64().max(1e-9);
         let line = format!(
             "t = {:.4}/{end} s | {rate:.0} steps/s | {} fluid particles{} | dt {:.2e} s ({})",
             sim.time,
@@ -371,7 +524,7 @@ impl Progress {
             }
             None if self.last_line.elapsed() >= Duration::from_secs(10) => {
                 self.last_line = Instant::now();
-                let eta = (end - sim.time) / sim.time.max(1e-300) * wall.as_secs_f64();
+                let eta = (end - sim.time) / (sim.time - self.start_time).max(1e-300) * wall.as_secs_f64();
                 eprintln!("{line} | ETA {eta:.0} s");
             }
             None => {}
@@ -389,11 +542,29 @@ fn io_error(what: &str, path: &std::path::Path, e: std::io::Error) -> RunError {
     RunError::Io(format!("cannot write {what} {}: {e}", path.display()))
 }
 
+/// The running figures of a run's time loop that its summary and frame schedule need; kept in
+/// checkpoints, so that a resumed run carries them on.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Tally {
+    /// Simulated time (s) of each frame written, in order.
+    pub frame_times: Vec<f64>,
+    /// When the next frame is due (s), with `output.every_s`.
+    pub next_frame_time: f64,
+    /// Particles moved, summed over steps.
+    pub particle_steps: f64,
+    pub max_density_error: f64,
+    /// Largest fluid speed over all steps (m/s).
+    pub max_speed: f64,
+    /// Wall time the run has taken (s): before this process, then up to the last checkpoint.
+    pub wall_s: f64,
+}
+
 fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
     mut state: S,
     scene: &Scene,
     initial: &InitialParticles,
     options: &RunOptions,
+    resumed: Option<Tally>,
 ) -> Result<Summary, RunError> {
     let dir = &options.out_dir;
 
@@ -405,13 +576,22 @@ fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
     let end = scene.simulation.end_time_s;
     let every_s = scene.output.every_s;
     let every_steps = scene.output.every_steps;
+    let frame_name = |k: usize| format!("frame_{k:06}.vtu");
+    let fresh = resumed.is_none();
+    let mut tally = resumed.unwrap_or(Tally { next_frame_time: every_s.unwrap_or(f64::INFINITY), ..Tally::default() });
+    let earlier_wall_s = tally.wall_s;
     let expected_frames = every_s.map(|e| (end / e).ceil() as usize + 1).unwrap_or(1024);
-    let mut series = Series::new(dir.join(format!("{}.pvd", scene.name)), expected_frames);
+    let listed = if scene.output.formats.contains(&FrameFormat::Vtu) {
+        tally.frame_times.iter().enumerate().map(|(k, &t)| (t, frame_name(k))).collect()
+    } else {
+        Vec::new()
+    };
+    let mut series = Series::new(dir.join(format!("{}.pvd", scene.name)), expected_frames, listed);
     let mut frame = Frame::default();
-    let mut frames = 0usize;
-    let mut write_frame = |sim: &Simulation<R, M>, frames: &mut usize| -> Result<(), RunError> {
+    let started = Instant::now();
+    let mut write_frame = |sim: &Simulation<R, M>, tally: &mut Tally| -> Result<(), RunError> {
         frame.capture(sim);
-        let name = format!("frame_{:06}.vtu", *frames);
+        let name = frame_name(tally.frame_times.len());
         let path = dir.join(&name);
         for format in &scene.output.formats {
             let (file, bytes) = match format {
@@ -436,32 +616,35 @@ fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
         if scene.output.formats.contains(&FrameFormat::Vtu) {
             series.push(sim.time, &name).map_err(|e| io_error("series", series.path(), e))?;
         }
-        *frames += 1;
+        tally.frame_times.push(sim.time);
         Ok(())
     };
-    write_frame(state.sim(), &mut frames)?;
+    let save_checkpoint = |sim: &Simulation<R, M>, tally: &mut Tally| -> Result<(), RunError> {
+        tally.wall_s = earlier_wall_s + started.elapsed().as_secs_f64();
+        let path = dir.join(checkpoint::FILE_NAME);
+        checkpoint::write(dir, sim, scene, tally).map_err(|e| io_error("checkpoint", &path, e))
+    };
+    if fresh {
+        write_frame(state.sim(), &mut tally)?;
+        save_checkpoint(state.sim(), &mut tally)?;
+    }
 
-    let started = Instant::now();
     let mut last_report = started;
-    let mut progress = Progress::new(options.quiet);
-    let mut particle_steps = 0f64;
-    let mut max_density_error = 0f64;
-    let mut max_speed = 0f64;
-    let mut next_frame_time = every_s.unwrap_or(f64::INFINITY);
-    let summary = |sim: &Simulation<R, M>, frames: usize, particle_steps: f64, max_density_error: f64, max_speed: f64| {
-        let wall = started.elapsed().as_secs_f64();
+    let mut progress = Progress::new(options.quiet, state.sim().time, state.sim().steps);
+    let summary = |sim: &Simulation<R, M>, tally: &Tally| {
+        let wall = earlier_wall_s + started.elapsed().as_secs_f64();
         Summary {
             steps: sim.steps,
             simulated_s: sim.time,
             wall_s: wall,
-            particle_steps_per_s: if wall > 0.0 { particle_steps / wall } else { 0.0 },
+            particle_steps_per_s: if wall > 0.0 { tally.particle_steps / wall } else { 0.0 },
             fluid_particles: sim.fluid_count(),
             boundary_particles: sim.boundary_count(),
-            max_density_error,
-            max_speed_m_s: max_speed,
-            max_mach: max_speed / scene.material.sound_speed_m_s,
+            max_density_error: tally.max_density_error,
+            max_speed_m_s: tally.max_speed,
+            max_mach: tally.max_speed / scene.material.sound_speed_m_s,
             removed: sim.removed,
-            frames,
+            frames: tally.frame_times.len(),
             capacity_reached: sim.capacity_reached_at.map(|t| (t, sim.fluid_capacity())),
         }
     };
@@ -475,44 +658,44 @@ fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
         let dt = dt.min(end - sim.time);
         if let Err(stop) = state.step_with(dt, limit) {
             progress.finish();
-            return Err(stopped(stop, summary(state.sim(), frames, particle_steps, max_density_error, max_speed)));
+            return Err(stopped(stop, summary(state.sim(), &tally)));
         }
         let sim = state.sim();
-        particle_steps += state.particle_count() as f64;
-        max_density_error = max_density_error.max(sim.diagnostics.max_density_error);
-        max_speed = max_speed.max(sim.diagnostics.max_speed);
+        tally.particle_steps += state.particle_count() as f64;
+        tally.max_density_error = tally.max_density_error.max(sim.diagnostics.max_density_error);
+        tally.max_speed = tally.max_speed.max(sim.diagnostics.max_speed);
         let due = match every_steps {
             Some(k) => sim.steps % k == 0,
-            None => sim.time >= next_frame_time * (1.0 - 1e-9),
+            None => sim.time >= tally.next_frame_time * (1.0 - 1e-9),
         };
         if due {
             if let Err(stop) = state.sync() {
                 progress.finish();
-                return Err(stopped(stop, summary(state.sim(), frames, particle_steps, max_density_error, max_speed)));
+                return Err(stopped(stop, summary(state.sim(), &tally)));
             }
             let sim = state.sim();
-            write_frame(sim, &mut frames)?;
-            while next_frame_time <= sim.time * (1.0 + 1e-9) {
-                next_frame_time += every_s.unwrap_or(f64::INFINITY);
+            write_frame(sim, &mut tally)?;
+            while tally.next_frame_time <= sim.time * (1.0 + 1e-9) {
+                tally.next_frame_time += every_s.unwrap_or(f64::INFINITY);
             }
+            save_checkpoint(sim, &mut tally)?;
         }
         if !options.quiet && last_report.elapsed() >= Duration::from_millis(200) {
             last_report = Instant::now();
             progress.report(state.sim(), end, started.elapsed());
         }
-        if crate::interrupt::requested() {
+        if state.settled() && options.stop.is_some_and(|stop| stop.load(Ordering::Relaxed)) {
             progress.finish();
             if let Err(stop) = state.sync() {
-                return Err(stopped(stop, summary(state.sim(), frames, particle_steps, max_density_error, max_speed)));
+                return Err(stopped(stop, summary(state.sim(), &tally)));
             }
-            let s = summary(state.sim(), frames, particle_steps, max_density_error, max_speed);
-            return Err(RunError::Interrupted(Box::new(s)));
+            save_checkpoint(state.sim(), &mut tally)?;
+            return Err(RunError::Interrupted(Box::new(summary(state.sim(), &tally))));
         }
     }
     progress.finish();
     if let Err(stop) = state.sync() {
-        return Err(stopped(stop, summary(state.sim(), frames, particle_steps, max_density_error, max_speed)));
+        return Err(stopped(stop, summary(state.sim(), &tally)));
     }
-    let sim = state.sim();
-    Ok(summary(sim, frames, particle_steps, max_density_error, max_speed))
+    Ok(summary(state.sim(), &tally))
 }

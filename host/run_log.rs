@@ -5,7 +5,7 @@
 use crate::output::write_atomically;
 use crate::run::Summary;
 use crate::scene::{Precision, Scene};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// The scene with every default written out.
@@ -14,6 +14,13 @@ pub fn resolved(scene: &Scene) -> Scene {
     let v = &mut s.material.viscosity;
     v.nu_inf_m2_s = Some(v.nu_inf());
     s
+}
+
+/// Where `coil resume` took a run up again.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Resumed {
+    pub step: u64,
+    pub time_s: f64,
 }
 
 #[derive(Serialize)]
@@ -30,7 +37,10 @@ pub struct RunLog<'a> {
     pub status: &'static str,
     /// Why the run stopped early, if it did.
     pub diagnosis: Option<String>,
-    /// The summary printed at the end (None while running).
+    /// Each time `coil resume` continued the run, in order; absent for a run never stopped.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub resumed: Vec<Resumed>,
+    /// The summary printed at the end (None while running); a resumed run's covers it all.
     pub summary: Option<Summary>,
     pub scene: Scene,
 }

@@ -73,7 +73,7 @@ pub struct Simulation<R: Real, M: Model<R>> {
     /// Simulated time (s).
     pub time: f64,
     pub steps: u64,
-    previous_dt: Option<f64>,
+    pub(crate) previous_dt: Option<f64>,
     /// Fluid particles removed for leaving the domain box.
     pub removed: u64,
     /// Fluid particles injected by inlets.
@@ -350,6 +350,32 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         self.steps += 1;
         self.last_dt = dt;
         self.last_limit = limit;
+    }
+
+    /// Sets the clock as a checkpoint left it: time (s), steps, and the last step's dt (s) and
+    /// limit (`previous_dt` None before the first step).
+    pub(crate) fn restore_clock(&mut self, time: f64, steps: u64, previous_dt: Option<f64>, last_dt: f64, last_limit: Limit) {
+        self.time = time;
+        self.steps = steps;
+        self.previous_dt = previous_dt;
+        self.last_dt = last_dt;
+        self.last_limit = last_limit;
+    }
+
+    /// Sets the particle counts as a checkpoint left them.
+    pub(crate) fn restore_counts(
+        &mut self,
+        fluid_count: usize,
+        removed: u64,
+        injected: u64,
+        next_id: u32,
+        capacity_reached_at: Option<f64>,
+    ) {
+        self.fluid_count = fluid_count;
+        self.removed = removed;
+        self.injected = injected;
+        self.next_id = next_id;
+        self.capacity_reached_at = capacity_reached_at;
     }
 
     /// The guard: the latest diagnostics must show no runaway particle.

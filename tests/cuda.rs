@@ -901,3 +901,36 @@ fn an_unstable_run_on_the_gpu_keeps_its_frames() {
         std::fs::remove_dir_all(&out).ok();
     }
 }
+
+/// A run on the device stopped by its program waits for the step at which the device's figures
+/// come back (the 10th), checkpoints there, and resumed on the device writes the frames of a run
+/// never stopped, byte for byte (on a GPU too: two runs there are bit-identical).
+#[test]
+fn a_run_stopped_on_the_gpu_resumes_to_the_frames_of_one_never_stopped() {
+    use std::sync::atomic::AtomicBool;
+    let mut scene = dam_break();
+    scene.simulation.end_time_s = 0.04;
+    scene.output.every_s = Some(0.01);
+    let stop: &'static AtomicBool = Box::leak(Box::new(AtomicBool::new(true)));
+    for engine in engines() {
+        let root = std::env::temp_dir().join(format!("coil-cuda-resume-{}-{engine:?}", std::process::id()));
+        let (whole, stopped) = (root.join("whole"), root.join("stopped"));
+        let done = coil::run::run_on(Some(engine.open()), &scene, "dam_break.toml", &quiet_run_options(&whole)).expect("the run");
+        let options = coil::run::RunOptions { stop: Some(stop), ..quiet_run_options(&stopped) };
+        match coil::run::run_on(Some(engine.open()), &scene, "dam_break.toml", &options) {
+            Err(coil::run::RunError::Interrupted(s)) => assert_eq!(s.steps, 10, "{engine:?}: {s:?}"),
+            other => panic!("{engine:?}: expected the stop, got {other:?}"),
+        }
+        let resume = coil::run::ResumeOptions {
+            backend: coil::run::Backend::Cuda,
+            quiet: true,
+            preview: false,
+            end_time_s: None,
+            stop: None,
+        };
+        let resumed = coil::run::resume_on(Some(engine.open()), &stopped, &resume).expect("the resumed run");
+        assert_eq!((resumed.steps, resumed.frames), (done.steps, done.frames), "{engine:?}");
+        assert!(files(&whole) == files(&stopped), "{engine:?}: the resumed run's frames differ");
+        std::fs::remove_dir_all(&root).ok();
+    }
+}

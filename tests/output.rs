@@ -4,6 +4,8 @@ use coil::output::vtu::{encode, Field};
 use coil::output::vtu_read::parse;
 use coil::preview::{render, render_frame, Coloring, View};
 
+mod common;
+
 /// Positions, velocities, viscosities and ids of a test cloud.
 type Cloud = (Vec<[f64; 3]>, Vec<[f32; 3]>, Vec<f32>, Vec<u32>);
 
@@ -190,5 +192,181 @@ fn frames_also_as_binary_ply_and_splashsurf_xyz() {
     assert_eq!(ply.len() - end, 44 * n);
     let last_id = u32::from_le_bytes(ply[ply.len() - 4..].try_into().expect("4 bytes"));
     assert_eq!(last_id, frame.id[n - 1]);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Every file of a run's folder but its log and checkpoint (which hold wall times), by name.
+fn run_files(dir: &std::path::Path) -> Vec<(String, Vec<u8>)> {
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .expect("output folder")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| !p.ends_with("run.json") && !p.ends_with("checkpoint.bin"))
+        .map(|p| (p.file_name().expect("a name").to_string_lossy().into_owned(), std::fs::read(&p).expect("readable")))
+        .collect();
+    files.sort();
+    files
+}
+
+fn run_log(dir: &std::path::Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(dir.join("run.json")).expect("log")).expect("whole JSON")
+}
+
+/// Ctrl-C, then `coil resume`: the frames and series come out byte for byte as from a run never
+/// stopped, and the log's summary counts the whole run. A finished run goes further with
+/// `--end-time` and not without it.
+#[cfg(unix)]
+#[test]
+fn a_run_stopped_by_ctrl_c_resumes_to_the_frames_of_one_never_stopped() {
+    let dir = std::env::temp_dir().join(format!("coil-resume-{}", std::process::id()));
+    let (whole, stopped) = (dir.join("whole"), dir.join("stopped"));
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    let scene = scene.to_str().expect("utf-8");
+    let settings = ["--set", "output.every_steps=20", "--set", "simulation.end_time_s=0.06"];
+    let done = common::coil(&[&["run", scene, "--quiet", "--out", whole.to_str().expect("utf-8")], &settings[..]].concat());
+    assert!(done.status.success(), "{}", String::from_utf8_lossy(&done.stderr));
+
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_coil"))
+        .args(["run", scene, "--quiet", "--out", stopped.to_str().expect("utf-8")])
+        .args(settings)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("coil starts");
+    let started = std::time::Instant::now();
+    while !stopped.join("frame_000003.vtu").is_file() && started.elapsed() < std::time::Duration::from_secs(60) {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let sent = std::process::Command::new("kill").args(["-s", "INT", &child.id().to_string()]).status().expect("kill runs");
+    assert!(sent.success());
+    let ended = child.wait_with_output().expect("reaped");
+    let stderr = String::from_utf8_lossy(&ended.stderr);
+    assert_eq!(ended.status.code(), Some(130), "stopped before the end: {stderr}");
+    assert!(stderr.contains(&format!("`coil resume {}` continues it", stopped.display())), "{stderr}");
+    let at_stop = run_log(&stopped)["summary"]["steps"].as_u64().expect("steps");
+
+    let out = common::coil(&["resume", stopped.to_str().expect("utf-8"), "--quiet"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (a, b) = (run_files(&whole), run_files(&stopped));
+    assert_eq!(a.iter().map(|f| &f.0).collect::<Vec<_>>(), b.iter().map(|f| &f.0).collect::<Vec<_>>());
+    assert!(a.len() > 17 && a == b, "16 frames, the boundary and the series, byte for byte");
+    let (log_a, log_b) = (run_log(&whole), run_log(&stopped));
+    assert_eq!(log_b["status"], "completed");
+    assert_eq!(log_b["resumed"][0]["step"].as_u64(), Some(at_stop), "{log_b}");
+    for figure in ["steps", "frames", "simulated_s", "max_speed_m_s", "max_density_error", "fluid_particles"] {
+        assert_eq!(log_a["summary"][figure], log_b["summary"][figure], "{figure}");
+    }
+
+    let again = common::coil(&["resume", stopped.to_str().expect("utf-8"), "--quiet"]);
+    let stderr = String::from_utf8_lossy(&again.stderr);
+    assert_eq!(again.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("run.json: --end-time: the run reached its end time t = 0.06 s"), "{stderr}");
+    let earlier = common::coil(&["resume", stopped.to_str().expect("utf-8"), "--quiet", "--end-time", "0.03"]);
+    let stderr = String::from_utf8_lossy(&earlier.stderr);
+    assert!(
+        earlier.status.code() == Some(2) && stderr.contains("must be later than the checkpoint's t = 0.060000 s, got 0.03"),
+        "{stderr}"
+    );
+
+    let further = common::coil(&["resume", stopped.to_str().expect("utf-8"), "--quiet", "--end-time", "0.08"]);
+    assert!(further.status.success(), "{}", String::from_utf8_lossy(&further.stderr));
+    let log = run_log(&stopped);
+    assert_eq!((log["summary"]["steps"].as_u64(), log["summary"]["frames"].as_u64()), (Some(400), Some(21)), "{log}");
+    assert_eq!(log["scene"]["simulation"]["end_time_s"], 0.08);
+    let extended = run_files(&stopped);
+    for (name, bytes) in a.iter().filter(|f| f.0.starts_with("frame_")) {
+        assert!(extended.iter().any(|(n, b)| n == name && b == bytes), "{name} rewritten by the extension");
+    }
+    let pvd = std::fs::read_to_string(stopped.join("dam_break.pvd")).expect("series");
+    let times: Vec<f64> =
+        pvd.split("timestep=\"").skip(1).map(|s| s[..s.find('"').expect("quote")].parse().expect("a time")).collect();
+    assert!(times.len() == 21 && times.windows(2).all(|w| w[0] < w[1]) && times[20] == 0.08, "{times:?}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `coil resume` refuses, naming the file and the reason, a folder that is not a run's, a
+/// checkpoint cut short or missing, and a log whose scene was edited since the checkpoint.
+#[test]
+fn resume_refuses_what_it_cannot_continue() {
+    let dir = std::env::temp_dir().join(format!("coil-resume-refused-{}", std::process::id()));
+    let out = dir.join("run");
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    let done = common::coil(&[
+        "run",
+        scene.to_str().expect("utf-8"),
+        "--quiet",
+        "--set",
+        "simulation.end_time_s=0.002",
+        "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert!(done.status.success(), "{}", String::from_utf8_lossy(&done.stderr));
+    let refused = |expected: &str| {
+        let r = common::coil(&["resume", out.to_str().expect("utf-8"), "--quiet", "--end-time", "0.004"]);
+        let stderr = String::from_utf8_lossy(&r.stderr).into_owned();
+        assert_eq!(r.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(expected), "expected `{expected}` in: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    };
+    let checkpoint = out.join("checkpoint.bin");
+    let whole = std::fs::read(&checkpoint).expect("a checkpoint");
+    std::fs::write(&checkpoint, &whole[..whole.len() / 2]).expect("cut");
+    refused("checkpoint.bin: (file): is damaged or cut short");
+    std::fs::remove_file(&checkpoint).expect("removed");
+    refused("checkpoint.bin: (file): cannot be read");
+    std::fs::write(&checkpoint, &whole).expect("put back");
+    let log = std::fs::read_to_string(out.join("run.json")).expect("log");
+    std::fs::write(out.join("run.json"), log.replace("\"nu0_m2_s\": 0.05", "\"nu0_m2_s\": 0.06")).expect("edited");
+    refused("checkpoint.bin: (file): was taken from another scene than the one");
+    std::fs::write(out.join("run.json"), &log).expect("put back");
+    let resumed = common::coil(&["resume", out.to_str().expect("utf-8"), "--quiet", "--end-time", "0.004"]);
+    assert!(resumed.status.success(), "the folder resumes once whole: {}", String::from_utf8_lossy(&resumed.stderr));
+    let empty = dir.join("empty");
+    std::fs::create_dir_all(&empty).expect("empty folder");
+    let r = common::coil(&["resume", empty.to_str().expect("utf-8")]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.code() == Some(2) && stderr.contains("is not the output folder of a coil run"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A jet stopped mid-run by its program (the stop flag `coil run` sets on Ctrl-C) resumes to
+/// the frames of a run never stopped: the inlets' layers and wobble, the ids and the capacity's
+/// clock carry on from the checkpoint. The capacity fills during the run, so the stop must also
+/// carry the time it filled.
+#[test]
+fn a_jet_stopped_by_its_program_resumes_where_it_was() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let mut scene = common::scene(&common::jet_scene(
+        r#"nozzle = { shape = "circle", radius_m = 0.004 }"#,
+        "wobble_m = 0.0005\n[output]\nevery_s = 0.005",
+    ));
+    scene.simulation.end_time_s = 0.04;
+    scene.simulation.max_fluid_particles = Some(80);
+    let dir = std::env::temp_dir().join(format!("coil-resume-jet-{}", std::process::id()));
+    let (whole, stopped) = (dir.join("whole"), dir.join("stopped"));
+    let done = coil::run::run_on(None, &scene, "jet.toml", &common::quiet_run_options(&whole)).expect("the whole run");
+    let filled = done.capacity_reached.expect("the capacity fills").0;
+    assert!(filled > 0.01, "the capacity fills after the stop: {done:?}");
+
+    let stop: &'static AtomicBool = Box::leak(Box::new(AtomicBool::new(false)));
+    let watched = stopped.join("frame_000002.vtu");
+    let watcher = std::thread::spawn(move || {
+        let started = std::time::Instant::now();
+        while !watched.is_file() && started.elapsed() < std::time::Duration::from_secs(60) {
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+        stop.store(true, Ordering::Relaxed);
+    });
+    let options = coil::run::RunOptions { stop: Some(stop), ..common::quiet_run_options(&stopped) };
+    match coil::run::run_on(None, &scene, "jet.toml", &options) {
+        Err(coil::run::RunError::Interrupted(s)) => assert!(s.simulated_s < filled && s.steps < done.steps, "{s:?}"),
+        other => panic!("expected the stop, got {other:?}"),
+    }
+    watcher.join().expect("watcher");
+    let resume =
+        coil::run::ResumeOptions { backend: coil::run::Backend::Cpu, quiet: true, preview: false, end_time_s: None, stop: None };
+    let resumed = coil::run::resume_on(None, &stopped, &resume).expect("the resumed run");
+    assert_eq!((resumed.steps, resumed.frames, resumed.fluid_particles), (done.steps, done.frames, done.fluid_particles));
+    assert_eq!(resumed.capacity_reached, done.capacity_reached);
+    let (a, b) = (run_files(&whole), run_files(&stopped));
+    assert!(a.len() == done.frames + 2 && a == b, "frames, boundary and series byte for byte");
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -8,8 +8,8 @@ use std::io;
 use std::path::{Path, PathBuf};
 
 /// The files a run writes into its output folder that `dir` already holds: its log, the
-/// boundary, the series, and every frame in each format, with any temporary left by a killed
-/// run. Other files are the user's and are never listed.
+/// boundary, the series, its checkpoint, and every frame in each format, with any temporary
+/// left by a killed run. Other files are the user's and are never listed.
 pub fn earlier_run_files(dir: &Path) -> io::Result<Vec<PathBuf>> {
     if !dir.is_dir() {
         return Ok(Vec::new());
@@ -22,7 +22,9 @@ pub fn earlier_run_files(dir: &Path) -> io::Result<Vec<PathBuf>> {
         let frame = name.strip_prefix("frame_").and_then(|rest| rest.split_once('.')).is_some_and(|(number, ext)| {
             number.len() == 6 && number.bytes().all(|b| b.is_ascii_digit()) && ["vtu", "ply", "xyz", "png"].contains(&ext)
         });
-        if path.is_file() && (frame || name == "run.json" || name == "boundary.vtu" || name.ends_with(".pvd")) {
+        if path.is_file()
+            && (frame || ["run.json", "boundary.vtu", crate::checkpoint::FILE_NAME].contains(&name) || name.ends_with(".pvd"))
+        {
             files.push(path);
         }
     }

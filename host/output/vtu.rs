@@ -81,8 +81,12 @@ pub struct Series {
 }
 
 impl Series {
-    pub fn new(path: PathBuf, capacity: usize) -> Self {
-        Self { path, entries: Vec::with_capacity(capacity) }
+    /// A series with room for `capacity` frames that already lists `earlier`: (time (s), file)
+    /// of the frames a resumed run wrote before it stopped.
+    pub fn new(path: PathBuf, capacity: usize, earlier: Vec<(f64, String)>) -> Self {
+        let mut entries = earlier;
+        entries.reserve(capacity.saturating_sub(entries.len()));
+        Self { path, entries }
     }
 
     /// Records a frame file (relative to the series file) at simulated time `t` (s) and

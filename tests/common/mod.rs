@@ -101,5 +101,6 @@ pub fn quiet_run_options(out: &std::path::Path) -> coil::run::RunOptions {
         preview: false,
         overrides: vec![],
         overwrite: false,
+        stop: None,
     }
 }

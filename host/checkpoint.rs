@@ -1,0 +1,368 @@
+//! `checkpoint.bin` in a run's output folder: the whole state of the run at its latest frame
+//! (or where Ctrl-C stopped it), from which `coil resume` continues bit for bit as if the run
+//! had never stopped.
+//!
+//! Only what a step reads from the step before is kept: positions, velocities at the full and
+//! the half step, ids and densities of the live particles in their current order (the next
+//! sort is stable in that order), the clock and dt of the last step, the diagnostics the next
+//! dt reads, each inlet's progress, and the frame schedule and running figures of the summary.
+//! Everything else (walls' mirror images, the grid, stresses, accelerations) is rebuilt from
+//! the scene or recomputed by the next step.
+//!
+//! Layout, little-endian: magic, format version, bytes of a real (4 or 8), the scene's
+//! fingerprint, the fields in the order `write` gives them, and an FNV-1a checksum of all the
+//! bytes before it, so a damaged file is refused rather than misread.
+
+use crate::model::Model;
+use crate::run::Tally;
+use crate::scene::Scene;
+use crate::simulation::{Diagnostics, Simulation};
+use crate::time_step::Limit;
+use coil_kernels::Real;
+use std::path::Path;
+
+/// The checkpoint's file name in the output folder.
+pub const FILE_NAME: &str = "checkpoint.bin";
+
+const MAGIC: &[u8; 8] = b"COILCKPT";
+const FORMAT_VERSION: u32 = 1;
+
+/// FNV-1a, 64 bits: the same value on every machine and Rust version, unlike std's hasher.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
+}
+
+/// Identifies the physics of `scene` (the resolved scene `run.json` logs, precision included):
+/// a checkpoint resumes only the scene it was taken from. The end time is left out, so that a
+/// run can be resumed further than it was first asked to go.
+pub fn fingerprint(scene: &Scene) -> u64 {
+    let mut s = crate::run_log::resolved(scene);
+    s.simulation.end_time_s = 0.0;
+    fnv1a(&serde_json::to_vec(&s).expect("a scene serialises"))
+}
+
+fn limit_code(limit: Limit) -> u8 {
+    match limit {
+        Limit::Acoustic => 0,
+        Limit::Viscous => 1,
+        Limit::Velocity => 2,
+        Limit::Fixed => 3,
+    }
+}
+
+fn limit_from(code: u8) -> Option<Limit> {
+    [Limit::Acoustic, Limit::Viscous, Limit::Velocity, Limit::Fixed].get(usize::from(code)).copied()
+}
+
+/// Appends fields to a checkpoint's bytes.
+struct Writer(Vec<u8>);
+
+impl Writer {
+    fn u8(&mut self, v: u8) {
+        self.0.push(v);
+    }
+    fn u32(&mut self, v: u32) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn u64(&mut self, v: u64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn f64(&mut self, v: f64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    /// `None` as NaN, which no time or dt of a run can be.
+    fn optional_f64(&mut self, v: Option<f64>) {
+        self.f64(v.unwrap_or(f64::NAN));
+    }
+    fn f64s(&mut self, v: &[f64]) {
+        for &x in v {
+            self.f64(x);
+        }
+    }
+    /// Reals at their own width: an f32 goes through f64 and back exactly.
+    fn reals<R: Real>(&mut self, v: &[R]) {
+        for &x in v {
+            match std::mem::size_of::<R>() {
+                4 => self.0.extend_from_slice(&(x.to_f64() as f32).to_le_bytes()),
+                _ => self.f64(x.to_f64()),
+            }
+        }
+    }
+}
+
+/// Reads a checkpoint's fields in order; every shortfall is an error naming what was cut off.
+struct Reader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
+        let end = self.at.checked_add(n).filter(|&e| e <= self.bytes.len()).ok_or_else(|| format!("ends inside {what}"))?;
+        let out = &self.bytes[self.at..end];
+        self.at = end;
+        Ok(out)
+    }
+    fn u8(&mut self, what: &str) -> Result<u8, String> {
+        Ok(self.take(1, what)?[0])
+    }
+    fn u32(&mut self, what: &str) -> Result<u32, String> {
+        Ok(u32::from_le_bytes(self.take(4, what)?.try_into().expect("4 bytes")))
+    }
+    fn u64(&mut self, what: &str) -> Result<u64, String> {
+        Ok(u64::from_le_bytes(self.take(8, what)?.try_into().expect("8 bytes")))
+    }
+    fn f64(&mut self, what: &str) -> Result<f64, String> {
+        Ok(f64::from_le_bytes(self.take(8, what)?.try_into().expect("8 bytes")))
+    }
+    fn optional_f64(&mut self, what: &str) -> Result<Option<f64>, String> {
+        let v = self.f64(what)?;
+        Ok((!v.is_nan()).then_some(v))
+    }
+    /// A count of `size`-byte items that must fit in what is left.
+    fn count(&mut self, size: usize, what: &str) -> Result<usize, String> {
+        let n = self.u64(what)?;
+        usize::try_from(n)
+            .ok()
+            .filter(|&n| n.checked_mul(size).is_some_and(|b| b <= self.bytes.len() - self.at))
+            .ok_or_else(|| format!("claims {n} {what}, more than the file holds"))
+    }
+}
+
+/// A checkpoint read from disk, its particle arrays still encoded until they are restored into
+/// a run of the right precision.
+pub struct Checkpoint {
+    /// Bytes of one real: 4 (f32) or 8 (f64).
+    pub real_bytes: usize,
+    pub fingerprint: u64,
+    pub time: f64,
+    pub steps: u64,
+    previous_dt: Option<f64>,
+    removed: u64,
+    injected: u64,
+    capacity_reached_at: Option<f64>,
+    fluid_count: usize,
+    next_id: u32,
+    diagnostics: Diagnostics,
+    last_dt: f64,
+    last_limit: Limit,
+    /// Each inlet's travelled distance (m) and layers injected.
+    inlets: Vec<(f64, u64)>,
+    pub tally: Tally,
+    /// Live particles, boundary included.
+    pub particles: usize,
+    /// Where the particle arrays start in `bytes`.
+    particle_data: usize,
+    bytes: Vec<u8>,
+}
+
+/// The checkpoint of `sim` (its host particles current) with the drive's `tally`, as bytes.
+pub fn encode<R: Real, M: Model<R>>(sim: &Simulation<R, M>, scene: &Scene, tally: &Tally) -> Vec<u8> {
+    let diagnostics = &sim.diagnostics;
+    let p = &sim.particles;
+    let n = p.len();
+    let mut w = Writer(Vec::with_capacity(256 + n * (24 + 7 * std::mem::size_of::<R>() + 4)));
+    w.0.extend_from_slice(MAGIC);
+    w.u32(FORMAT_VERSION);
+    w.u8(std::mem::size_of::<R>() as u8);
+    w.u64(fingerprint(scene));
+    w.f64(sim.time);
+    w.u64(sim.steps);
+    w.optional_f64(sim.previous_dt);
+    w.u64(sim.removed);
+    w.u64(sim.injected);
+    w.optional_f64(sim.capacity_reached_at);
+    w.u64(sim.fluid_count() as u64);
+    w.u32(sim.next_id);
+    w.f64(diagnostics.max_speed);
+    w.f64(diagnostics.max_density_error);
+    w.u64(diagnostics.bad_particles);
+    w.f64(sim.last_dt);
+    w.u8(limit_code(sim.last_limit));
+    w.u64(sim.inlets().len() as u64);
+    for inlet in sim.inlets() {
+        let (travelled, layers) = inlet.progress();
+        w.f64(travelled);
+        w.u64(layers);
+    }
+    w.u64(tally.frame_times.len() as u64);
+    w.f64s(&tally.frame_times);
+    w.f64(tally.next_frame_time);
+    w.f64(tally.particle_steps);
+    w.f64(tally.max_density_error);
+    w.f64(tally.max_speed);
+    w.f64(tally.wall_s);
+    w.u64(n as u64);
+    for a in 0..3 {
+        w.f64s(&p.position[a][..n]);
+    }
+    for a in 0..3 {
+        w.reals(&p.velocity[a][..n]);
+    }
+    for a in 0..3 {
+        w.reals(&p.velocity_half[a][..n]);
+    }
+    for &id in &p.id[..n] {
+        w.u32(id);
+    }
+    w.reals(&p.density[..n]);
+    let sum = fnv1a(&w.0);
+    w.u64(sum);
+    w.0
+}
+
+/// Writes the checkpoint (see [`encode`]) to `dir` through a temporary name, so the one there
+/// is always whole.
+pub fn write<R: Real, M: Model<R>>(dir: &Path, sim: &Simulation<R, M>, scene: &Scene, tally: &Tally) -> std::io::Result<()> {
+    crate::output::write_atomically(&dir.join(FILE_NAME), &encode(sim, scene, tally))
+}
+
+impl Checkpoint {
+    /// Reads and checks `path`; the error says what is wrong with the file.
+    pub fn read(path: &Path) -> Result<Self, String> {
+        let bytes = std::fs::read(path).map_err(|e| format!("cannot be read: {e}"))?;
+        Self::decode(bytes)
+    }
+
+    /// Parses a checkpoint's bytes, checking its magic, version and checksum.
+    pub fn decode(bytes: Vec<u8>) -> Result<Self, String> {
+        if bytes.len() < MAGIC.len() + 8 || &bytes[..MAGIC.len()] != MAGIC {
+            return Err("is not a coil checkpoint".into());
+        }
+        let (body, sum) = bytes.split_at(bytes.len() - 8);
+        if fnv1a(body) != u64::from_le_bytes(sum.try_into().expect("8 bytes")) {
+            return Err("is damaged or cut short (its checksum does not match)".into());
+        }
+        let mut r = Reader { bytes: body, at: MAGIC.len() };
+        let version = r.u32("the format version")?;
+        if version != FORMAT_VERSION {
+            return Err(format!("has format version {version}; this coil reads version {FORMAT_VERSION}"));
+        }
+        let real_bytes = usize::from(r.u8("the precision")?);
+        if real_bytes != 4 && real_bytes != 8 {
+            return Err(format!("gives {real_bytes} bytes a real; only 4 (f32) and 8 (f64) exist"));
+        }
+        let fingerprint = r.u64("the scene's fingerprint")?;
+        let time = r.f64("the time")?;
+        let steps = r.u64("the step count")?;
+        let previous_dt = r.optional_f64("the last dt")?;
+        let removed = r.u64("the removed count")?;
+        let injected = r.u64("the injected count")?;
+        let capacity_reached_at = r.optional_f64("the capacity time")?;
+        let fluid_count = r.u64("the fluid count")? as usize;
+        let next_id = r.u32("the next id")?;
+        let diagnostics = Diagnostics {
+            max_speed: r.f64("the diagnostics")?,
+            max_density_error: r.f64("the diagnostics")?,
+            bad_particles: r.u64("the diagnostics")?,
+        };
+        let last_dt = r.f64("the last dt")?;
+        let code = r.u8("the dt limit")?;
+        let last_limit = limit_from(code).ok_or_else(|| format!("gives an unknown dt limit {code}"))?;
+        let inlet_count = r.count(16, "inlets")?;
+        let inlets =
+            (0..inlet_count).map(|_| Ok((r.f64("an inlet")?, r.u64("an inlet")?))).collect::<Result<Vec<_>, String>>()?;
+        let frame_count = r.count(8, "frames")?;
+        let frame_times = (0..frame_count).map(|_| r.f64("the frame times")).collect::<Result<Vec<_>, _>>()?;
+        let tally = Tally {
+            frame_times,
+            next_frame_time: r.f64("the frame schedule")?,
+            particle_steps: r.f64("the summary's figures")?,
+            max_density_error: r.f64("the summary's figures")?,
+            max_speed: r.f64("the summary's figures")?,
+            wall_s: r.f64("the summary's figures")?,
+        };
+        let per_particle = 24 + 7 * real_bytes + 4;
+        let particles = r.count(per_particle, "particles")?;
+        let particle_data = r.at;
+        r.take(particles * per_particle, "the particles")?;
+        if r.at != body.len() {
+            return Err(format!("has {} bytes past its particles", body.len() - r.at));
+        }
+        Ok(Self {
+            real_bytes,
+            fingerprint,
+            time,
+            steps,
+            previous_dt,
+            removed,
+            injected,
+            capacity_reached_at,
+            fluid_count,
+            next_id,
+            diagnostics,
+            last_dt,
+            last_limit,
+            inlets,
+            tally,
+            particles,
+            particle_data,
+            bytes,
+        })
+    }
+
+    /// Puts the checkpoint's state into `sim`, a run just set up from the scene it was taken
+    /// from (the caller has compared fingerprints). The error names what does not fit.
+    pub fn restore<R: Real, M: Model<R>>(&self, sim: &mut Simulation<R, M>) -> Result<(), String> {
+        if self.real_bytes != std::mem::size_of::<R>() {
+            return Err(format!("holds {}-byte reals, and the run is {}", self.real_bytes, R::NAME));
+        }
+        let boundary = sim.boundary_count();
+        if self.particles > sim.particles.capacity() || self.fluid_count + boundary != self.particles {
+            return Err(format!(
+                "holds {} particles ({} fluid) where the scene has {boundary} wall particles and room for {} in all",
+                self.particles,
+                self.fluid_count,
+                sim.particles.capacity()
+            ));
+        }
+        if self.inlets.len() != sim.inlets().len() {
+            return Err(format!("holds {} inlets where the scene has {}", self.inlets.len(), sim.inlets().len()));
+        }
+        let n = self.particles;
+        let mut at = self.particle_data;
+        let mut next = |width: usize| {
+            let chunk = &self.bytes[at..at + width];
+            at += width;
+            chunk
+        };
+        let real = |b: &[u8]| match b.len() {
+            4 => R::from_f64(f32::from_le_bytes(b.try_into().expect("4 bytes")) as f64),
+            _ => R::from_f64(f64::from_le_bytes(b.try_into().expect("8 bytes"))),
+        };
+        let p = &mut sim.particles;
+        p.set_len(n);
+        for a in 0..3 {
+            for (x, b) in p.position[a][..n].iter_mut().zip(next(8 * n).chunks_exact(8)) {
+                *x = f64::from_le_bytes(b.try_into().expect("8 bytes"));
+            }
+        }
+        let rb = self.real_bytes;
+        for a in 0..3 {
+            for (v, b) in p.velocity[a][..n].iter_mut().zip(next(rb * n).chunks_exact(rb)) {
+                *v = real(b);
+            }
+        }
+        for a in 0..3 {
+            for (v, b) in p.velocity_half[a][..n].iter_mut().zip(next(rb * n).chunks_exact(rb)) {
+                *v = real(b);
+            }
+        }
+        for (id, b) in p.id[..n].iter_mut().zip(next(4 * n).chunks_exact(4)) {
+            *id = u32::from_le_bytes(b.try_into().expect("4 bytes"));
+        }
+        for (d, b) in p.density[..n].iter_mut().zip(next(rb * n).chunks_exact(rb)) {
+            *d = real(b);
+        }
+        if p.id[..n].iter().any(|&id| id >= self.next_id) {
+            return Err(format!("holds a particle id at or above its next id {}", self.next_id));
+        }
+        for (inlet, &(travelled, layers)) in sim.inlets.iter_mut().zip(&self.inlets) {
+            inlet.set_progress(travelled, layers);
+        }
+        sim.restore_clock(self.time, self.steps, self.previous_dt, self.last_dt, self.last_limit);
+        sim.restore_counts(self.fluid_count, self.removed, self.injected, self.next_id, self.capacity_reached_at);
+        sim.diagnostics = self.diagnostics;
+        Ok(())
+    }
+}
