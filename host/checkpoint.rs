@@ -32,12 +32,18 @@ fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
 }
 
+/// Fields of a scene that a resumed run may change ([`RESUMABLE`] as `--set` spells them): how
+/// far it runs, how it picks dt (to get past an instability from the last good frame), and
+/// what it writes.
+pub const RESUMABLE: [&str; 3] = ["simulation.end_time_s", "simulation.time_step", "output"];
+
 /// Identifies the physics of `scene` (the resolved scene `run.json` logs, precision included):
-/// a checkpoint resumes only the scene it was taken from. The end time is left out, so that a
-/// run can be resumed further than it was first asked to go.
+/// a checkpoint resumes only the scene it was taken from, up to the [`RESUMABLE`] fields.
 pub fn fingerprint(scene: &Scene) -> u64 {
     let mut s = crate::run_log::resolved(scene);
     s.simulation.end_time_s = 0.0;
+    s.simulation.time_step = Default::default();
+    s.output = Default::default();
     fnv1a(&serde_json::to_vec(&s).expect("a scene serialises"))
 }
 

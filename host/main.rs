@@ -59,16 +59,17 @@ enum Command {
         #[arg(long)]
         overwrite: bool,
     },
-    /// Continue a run that stopped (Ctrl-C, a kill, a crash, a lost machine) from its checkpoint,
-    /// the latest frame or where Ctrl-C stopped it, into the same folder: the frames come out
-    /// as the run would have written them without the stop. With --end-time, run a finished
-    /// run further.
+    /// Continue a run that stopped (Ctrl-C, a kill, a crash, a lost machine, an instability)
+    /// from its checkpoint, the latest frame or where Ctrl-C stopped it, into the same folder:
+    /// the frames come out as the run would have written them without the stop.
     Resume {
         /// The run's output folder (it holds run.json and checkpoint.bin).
         dir: PathBuf,
-        /// Run to this simulated time (s) instead of the scene's end time.
-        #[arg(long, value_name = "SECONDS")]
-        end_time: Option<f64>,
+        /// Change a field the checkpoint does not fix, as `run --set` does: a later
+        /// simulation.end_time_s, simulation.time_step.* (to get past an instability from the
+        /// last good frame), output.*.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
         /// Where the physics runs, as for `run`. The same backend as before gives the frames of
         /// an unstopped run bit for bit; another gives the same physics in another rounding.
         #[arg(long, value_enum, default_value = "auto")]
@@ -393,18 +394,12 @@ fn main() -> ExitCode {
             };
             finish_run(run(&parsed, &file, &options), &options.out_dir, &parsed.name)
         }
-        Command::Resume { dir, end_time, backend, threads, quiet, preview } => {
+        Command::Resume { dir, set, backend, threads, quiet, preview } => {
             if let Err(e) = set_threads(threads) {
                 eprintln!("error: {e}");
                 return ExitCode::from(2);
             }
-            let options = ResumeOptions {
-                backend: backend.backend(),
-                quiet,
-                preview,
-                end_time_s: end_time,
-                stop: Some(coil::interrupt::watch()),
-            };
+            let options = ResumeOptions { backend: backend.backend(), quiet, preview, set, stop: Some(coil::interrupt::watch()) };
             let result = resume(&dir, &options);
             let name = coil::scene::Scene::load(&dir.join("run.json")).map(|s| s.name).unwrap_or_default();
             finish_run(result, &dir, &name)
@@ -423,8 +418,13 @@ fn finish_run(result: Result<Summary, RunError>, out_dir: &Path, name: &str) -> 
         }
         Err(e) => {
             eprintln!("error: {e}");
-            if matches!(e, RunError::Interrupted(_)) {
-                eprintln!("`coil resume {}` continues it", out_dir.display());
+            match e {
+                RunError::Interrupted(_) => eprintln!("`coil resume {}` continues it", out_dir.display()),
+                RunError::Unstable(..) => eprintln!(
+                    "`coil resume {} --set simulation.time_step.safety_factor=0.5` continues it from its last frame with a smaller dt",
+                    out_dir.display()
+                ),
+                _ => {}
             }
             ExitCode::from(match e {
                 RunError::Scene(_) | RunError::Backend(_) => 2,

@@ -243,14 +243,15 @@ fn execute(
     result
 }
 
-/// What `coil resume` may change: where the run goes on, how it reports, and how far it goes.
+/// How `coil resume` goes on.
 #[derive(Debug, Clone)]
 pub struct ResumeOptions {
     pub backend: Backend,
     pub quiet: bool,
     pub preview: bool,
-    /// A new end time (s), later than the checkpoint's, to run a finished run further.
-    pub end_time_s: Option<f64>,
+    /// `--set` overrides of the fields `checkpoint::RESUMABLE` names: a later end time, another
+    /// time step, other output.
+    pub set: Vec<String>,
     /// As `RunOptions::stop`.
     pub stop: Option<&'static AtomicBool>,
 }
@@ -272,7 +273,24 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
         bad(&log_path, "(file)", format!("cannot be read ({e}): {} is not the output folder of a coil run", dir.display()))
     })?;
     let log: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(&log_path, "(syntax)", e.to_string()))?;
-    let mut scene = Scene::load(&log_path).map_err(RunError::Scene)?;
+    let mut overrides = Vec::new();
+    for given in &options.set {
+        let key = given.split_once('=').map_or(given.as_str(), |(key, _)| key.trim());
+        let resumable =
+            checkpoint::RESUMABLE.iter().any(|f| key == *f || key.strip_prefix(f).is_some_and(|r| r.starts_with('.')));
+        if !resumable {
+            return Err(bad(
+                Path::new("--set"),
+                key,
+                format!(
+                    "cannot change when resuming: the checkpoint holds the state of the scene it was taken from; only {} may",
+                    checkpoint::RESUMABLE.join(", ")
+                ),
+            ));
+        }
+        overrides.push(crate::scene_override::Override::parse(given).map_err(RunError::Scene)?);
+    }
+    let scene = Scene::load_with(&log_path, &overrides).map_err(RunError::Scene)?;
     let checkpoint_path = dir.join(checkpoint::FILE_NAME);
     let checkpoint = Checkpoint::read(&checkpoint_path).map_err(|e| bad(&checkpoint_path, "(file)", e))?;
     if checkpoint.fingerprint != checkpoint::fingerprint(&scene) {
@@ -282,29 +300,19 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
             format!("was taken from another scene than the one {} logs (edited since the run?)", log_path.display()),
         ));
     }
-    match options.end_time_s {
-        Some(end) if !(end > checkpoint.time) || !end.is_finite() => {
-            return Err(bad(
-                &log_path,
-                "--end-time",
-                format!("must be later than the checkpoint's t = {:.6} s, got {end}", checkpoint.time),
-            ));
-        }
-        Some(end) => scene.simulation.end_time_s = end,
-        None if checkpoint.time >= scene.simulation.end_time_s * (1.0 - 1e-12) => {
-            return Err(bad(
-                &log_path,
-                "--end-time",
-                format!(
-                    "the run reached its end time t = {} s; pass --end-time with a later time to run it further",
-                    scene.simulation.end_time_s
-                ),
-            ));
-        }
-        None => {}
+    let end = scene.simulation.end_time_s;
+    if checkpoint.time >= end * (1.0 - 1e-12) {
+        let reason = if options.set.iter().any(|o| o.trim_start().starts_with("simulation.end_time_s")) {
+            format!("must be later than the checkpoint's t = {:.6} s, got {end}", checkpoint.time)
+        } else {
+            format!("the run reached its end time t = {end} s; pass --set simulation.end_time_s=LATER to run it further")
+        };
+        return Err(bad(&log_path, "simulation.end_time_s", reason));
     }
     let scene_file = log["scene_file"].as_str().unwrap_or_default().to_string();
-    let overrides = log["overrides"].as_array().map(|a| a.iter().filter_map(|o| o.as_str().map(String::from)).collect());
+    let mut all_overrides: Vec<String> =
+        log["overrides"].as_array().map(|a| a.iter().filter_map(|o| o.as_str().map(String::from)).collect()).unwrap_or_default();
+    all_overrides.extend(options.set.iter().cloned());
     let earlier = serde_json::from_value(log["resumed"].clone()).unwrap_or_default();
     remove_frames_from(dir, checkpoint.tally.frame_times.len())?;
     let run_options = RunOptions {
@@ -313,7 +321,7 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
         precision: None,
         quiet: options.quiet,
         preview: options.preview,
-        overrides: overrides.unwrap_or_default(),
+        overrides: all_overrides,
         overwrite: false,
         stop: options.stop,
     };

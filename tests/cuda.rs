@@ -921,13 +921,8 @@ fn a_run_stopped_on_the_gpu_resumes_to_the_frames_of_one_never_stopped() {
             Err(coil::run::RunError::Interrupted(s)) => assert_eq!(s.steps, 10, "{engine:?}: {s:?}"),
             other => panic!("{engine:?}: expected the stop, got {other:?}"),
         }
-        let resume = coil::run::ResumeOptions {
-            backend: coil::run::Backend::Cuda,
-            quiet: true,
-            preview: false,
-            end_time_s: None,
-            stop: None,
-        };
+        let resume =
+            coil::run::ResumeOptions { backend: coil::run::Backend::Cuda, quiet: true, preview: false, set: vec![], stop: None };
         let resumed = coil::run::resume_on(Some(engine.open()), &stopped, &resume).expect("the resumed run");
         assert_eq!((resumed.steps, resumed.frames), (done.steps, done.frames), "{engine:?}");
         assert!(files(&whole) == files(&stopped), "{engine:?}: the resumed run's frames differ");

@@ -212,8 +212,8 @@ fn run_log(dir: &std::path::Path) -> serde_json::Value {
 }
 
 /// Ctrl-C, then `coil resume`: the frames and series come out byte for byte as from a run never
-/// stopped, and the log's summary counts the whole run. A finished run goes further with
-/// `--end-time` and not without it.
+/// stopped, and the log's summary counts the whole run. A finished run goes further with a
+/// later end time and not without one.
 #[cfg(unix)]
 #[test]
 fn a_run_stopped_by_ctrl_c_resumes_to_the_frames_of_one_never_stopped() {
@@ -258,15 +258,15 @@ fn a_run_stopped_by_ctrl_c_resumes_to_the_frames_of_one_never_stopped() {
     let again = common::coil(&["resume", stopped.to_str().expect("utf-8"), "--quiet"]);
     let stderr = String::from_utf8_lossy(&again.stderr);
     assert_eq!(again.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("run.json: --end-time: the run reached its end time t = 0.06 s"), "{stderr}");
-    let earlier = common::coil(&["resume", stopped.to_str().expect("utf-8"), "--quiet", "--end-time", "0.03"]);
+    assert!(stderr.contains("run.json: simulation.end_time_s: the run reached its end time t = 0.06 s"), "{stderr}");
+    let earlier = common::coil(&["resume", stopped.to_str().expect("utf-8"), "--quiet", "--set", "simulation.end_time_s=0.03"]);
     let stderr = String::from_utf8_lossy(&earlier.stderr);
     assert!(
         earlier.status.code() == Some(2) && stderr.contains("must be later than the checkpoint's t = 0.060000 s, got 0.03"),
         "{stderr}"
     );
 
-    let further = common::coil(&["resume", stopped.to_str().expect("utf-8"), "--quiet", "--end-time", "0.08"]);
+    let further = common::coil(&["resume", stopped.to_str().expect("utf-8"), "--quiet", "--set", "simulation.end_time_s=0.08"]);
     assert!(further.status.success(), "{}", String::from_utf8_lossy(&further.stderr));
     let log = run_log(&stopped);
     assert_eq!((log["summary"]["steps"].as_u64(), log["summary"]["frames"].as_u64()), (Some(400), Some(21)), "{log}");
@@ -283,7 +283,8 @@ fn a_run_stopped_by_ctrl_c_resumes_to_the_frames_of_one_never_stopped() {
 }
 
 /// `coil resume` refuses, naming the file and the reason, a folder that is not a run's, a
-/// checkpoint cut short or missing, and a log whose scene was edited since the checkpoint.
+/// checkpoint cut short or missing, a log whose scene was edited since the checkpoint, and a
+/// `--set` of the physics the checkpoint holds.
 #[test]
 fn resume_refuses_what_it_cannot_continue() {
     let dir = std::env::temp_dir().join(format!("coil-resume-refused-{}", std::process::id()));
@@ -299,13 +300,16 @@ fn resume_refuses_what_it_cannot_continue() {
         out.to_str().expect("utf-8"),
     ]);
     assert!(done.status.success(), "{}", String::from_utf8_lossy(&done.stderr));
-    let refused = |expected: &str| {
-        let r = common::coil(&["resume", out.to_str().expect("utf-8"), "--quiet", "--end-time", "0.004"]);
+    let refused_with = |set: &str, expected: &str| {
+        let r = common::coil(&["resume", out.to_str().expect("utf-8"), "--quiet", "--set", set]);
         let stderr = String::from_utf8_lossy(&r.stderr).into_owned();
         assert_eq!(r.status.code(), Some(2), "{stderr}");
         assert!(stderr.contains(expected), "expected `{expected}` in: {stderr}");
         assert!(!stderr.contains("panicked"), "{stderr}");
     };
+    let refused = |expected: &str| refused_with("simulation.end_time_s=0.004", expected);
+    refused_with("material.sound_speed_m_s=30", "--set: material.sound_speed_m_s: cannot change when resuming");
+    refused_with("inlet[0].speed_m_s=1", "--set: inlet[0].speed_m_s: cannot change when resuming");
     let checkpoint = out.join("checkpoint.bin");
     let whole = std::fs::read(&checkpoint).expect("a checkpoint");
     std::fs::write(&checkpoint, &whole[..whole.len() / 2]).expect("cut");
@@ -317,7 +321,7 @@ fn resume_refuses_what_it_cannot_continue() {
     std::fs::write(out.join("run.json"), log.replace("\"nu0_m2_s\": 0.05", "\"nu0_m2_s\": 0.06")).expect("edited");
     refused("checkpoint.bin: (file): was taken from another scene than the one");
     std::fs::write(out.join("run.json"), &log).expect("put back");
-    let resumed = common::coil(&["resume", out.to_str().expect("utf-8"), "--quiet", "--end-time", "0.004"]);
+    let resumed = common::coil(&["resume", out.to_str().expect("utf-8"), "--quiet", "--set", "simulation.end_time_s=0.004"]);
     assert!(resumed.status.success(), "the folder resumes once whole: {}", String::from_utf8_lossy(&resumed.stderr));
     let empty = dir.join("empty");
     std::fs::create_dir_all(&empty).expect("empty folder");
@@ -362,11 +366,49 @@ fn a_jet_stopped_by_its_program_resumes_where_it_was() {
     }
     watcher.join().expect("watcher");
     let resume =
-        coil::run::ResumeOptions { backend: coil::run::Backend::Cpu, quiet: true, preview: false, end_time_s: None, stop: None };
+        coil::run::ResumeOptions { backend: coil::run::Backend::Cpu, quiet: true, preview: false, set: vec![], stop: None };
     let resumed = coil::run::resume_on(None, &stopped, &resume).expect("the resumed run");
     assert_eq!((resumed.steps, resumed.frames, resumed.fluid_particles), (done.steps, done.frames, done.fluid_particles));
     assert_eq!(resumed.capacity_reached, done.capacity_reached);
     let (a, b) = (run_files(&whole), run_files(&stopped));
     assert!(a.len() == done.frames + 2 && a == b, "frames, boundary and series byte for byte");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A run stopped by the guard resumes from its last frame with a dt within the Eq. (10) bound
+/// and finishes, its earlier frames untouched.
+#[test]
+fn an_unstable_run_resumes_from_its_last_frame_with_a_smaller_dt() {
+    let dir = std::env::temp_dir().join(format!("coil-resume-unstable-{}", std::process::id()));
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    // 15 times the bound (2e-4 s): the guard stops it at t = 0.066 s, after the frame at 0.06 s.
+    let r = common::coil(&[
+        "run",
+        scene.to_str().expect("utf-8"),
+        "--quiet",
+        "--out",
+        dir.to_str().expect("utf-8"),
+        "--set",
+        "simulation.time_step.fixed_s=0.003",
+        "--set",
+        "simulation.time_step.allow_above_stability_bound=true",
+        "--set",
+        "output.every_s=0.02",
+        "--set",
+        "simulation.end_time_s=0.1",
+    ]);
+    assert_eq!(r.status.code(), Some(3), "{}", String::from_utf8_lossy(&r.stderr));
+    let before = run_files(&dir);
+    assert_eq!(before.iter().filter(|f| f.0.starts_with("frame_")).count(), 4, "frames at 0, 0.02, 0.04, 0.06 s");
+    let again = common::coil(&["resume", dir.to_str().expect("utf-8"), "--quiet"]);
+    assert_eq!(again.status.code(), Some(3), "the same dt fails again: {}", String::from_utf8_lossy(&again.stderr));
+    let r = common::coil(&["resume", dir.to_str().expect("utf-8"), "--quiet", "--set", "simulation.time_step.fixed_s=0.0002"]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let log = run_log(&dir);
+    assert_eq!((log["status"].as_str(), log["summary"]["frames"].as_u64()), (Some("completed"), Some(6)), "{log}");
+    let after = run_files(&dir);
+    for (name, bytes) in before.iter().filter(|f| f.0.starts_with("frame_")) {
+        assert!(after.iter().any(|(n, b)| n == name && b == bytes), "{name} rewritten");
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
