@@ -418,11 +418,12 @@ fn finish_run(result: Result<Summary, RunError>, out_dir: &Path, name: &str) -> 
         }
         Err(e) => {
             eprintln!("error: {e}");
-            match e {
+            match &e {
                 RunError::Interrupted(_) => eprintln!("`coil resume {}` continues it", out_dir.display()),
-                RunError::Unstable(..) => eprintln!(
-                    "`coil resume {} --set simulation.time_step.safety_factor=0.5` continues it from its last frame with a smaller dt",
-                    out_dir.display()
+                RunError::Unstable(i, _) => eprintln!(
+                    "`coil resume {} --set simulation.time_step.fixed_s={:.3e}` continues it from its last frame with a smaller dt",
+                    out_dir.display(),
+                    (0.5 * i.dt_s).min(i.stability_bound_s)
                 ),
                 _ => {}
             }

@@ -397,7 +397,9 @@ fn an_unstable_run_resumes_from_its_last_frame_with_a_smaller_dt() {
         "--set",
         "simulation.end_time_s=0.1",
     ]);
-    assert_eq!(r.status.code(), Some(3), "{}", String::from_utf8_lossy(&r.stderr));
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(3), "{stderr}");
+    assert!(stderr.contains("--set simulation.time_step.fixed_s=2.000e-4` continues it"), "the bound: {stderr}");
     let before = run_files(&dir);
     assert_eq!(before.iter().filter(|f| f.0.starts_with("frame_")).count(), 4, "frames at 0, 0.02, 0.04, 0.06 s");
     let again = common::coil(&["resume", dir.to_str().expect("utf-8"), "--quiet"]);
