@@ -1,6 +1,6 @@
 //! The `coil` command line.
 
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use coil::bench::{bench, cuda_available, precision_name, table_row, BenchBackend, BenchOptions};
 use coil::bench_report::{chart, csv, kernels_csv, markdown};
 use coil::check::check;
@@ -22,6 +22,27 @@ struct Cli {
     command: Command,
 }
 
+/// How `run` and `resume` execute a run.
+#[derive(Args)]
+struct Execution {
+    /// Where the physics runs: cpu; cuda (an NVIDIA GPU; needs a build with
+    /// `--features cuda`); or auto (a CUDA device when this build has the backend and one is
+    /// present, else the CPU). Resumed on the backend it started on, a run writes the frames of
+    /// one never stopped bit for bit; on another, the same physics in another rounding.
+    #[arg(long, value_enum, default_value = "auto")]
+    backend: BackendArg,
+    /// Worker threads [default: all cores].
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Print only the summary.
+    #[arg(long)]
+    quiet: bool,
+    /// Also write each frame as a PNG next to it (as `coil preview` draws it, coloured by
+    /// viscosity from nu_inf to nu0, or by speed for a Newtonian fluid).
+    #[arg(long)]
+    preview: bool,
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Run a scene on the CPU or a CUDA GPU and write frames (.vtu + .pvd for ParaView).
@@ -36,25 +57,12 @@ enum Command {
         /// Output folder [default: out/<scene name>].
         #[arg(long)]
         out: Option<PathBuf>,
-        /// Where the physics runs: cpu; cuda (an NVIDIA GPU; needs a build with
-        /// `--features cuda`); or auto (a CUDA device when this build has the backend and one is
-        /// present, else the CPU).
-        #[arg(long, value_enum, default_value = "auto")]
-        backend: BackendArg,
         /// Floating-point precision of the physics [default: the scene's].
         #[arg(long, value_enum)]
         precision: Option<PrecisionArg>,
-        /// Worker threads [default: all cores].
-        #[arg(long)]
-        threads: Option<usize>,
-        /// Print only the summary.
-        #[arg(long)]
-        quiet: bool,
-        /// Also write each frame as a PNG next to it (as `coil preview` draws it, coloured by
-        /// viscosity from nu_inf to nu0, or by speed for a Newtonian fluid).
-        #[arg(long)]
-        preview: bool,
-        /// Replace an earlier run in the output folder (its log, series and frames; nothing
+        #[command(flatten)]
+        execution: Execution,
+        /// Replace an earlier run in the output folder (its log, checkpoint, series and frames; nothing
         /// else there). Without it such a folder is refused, so that no run is lost by mistake.
         #[arg(long)]
         overwrite: bool,
@@ -70,19 +78,8 @@ enum Command {
         /// last good frame), output.*.
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
-        /// Where the physics runs, as for `run`. The same backend as before gives the frames of
-        /// an unstopped run bit for bit; another gives the same physics in another rounding.
-        #[arg(long, value_enum, default_value = "auto")]
-        backend: BackendArg,
-        /// Worker threads [default: all cores].
-        #[arg(long)]
-        threads: Option<usize>,
-        /// Print only the summary.
-        #[arg(long)]
-        quiet: bool,
-        /// Also write each frame as a PNG next to it, as for `run`.
-        #[arg(long)]
-        preview: bool,
+        #[command(flatten)]
+        execution: Execution,
     },
     /// Render a frame to a PNG: orthographic, coloured by viscosity (as the paper's figures) or
     /// speed, with a colour bar.
@@ -373,7 +370,7 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Run { scene, set, out, backend, precision, threads, quiet, preview, overwrite } => {
+        Command::Run { scene, set, out, precision, execution: Execution { backend, threads, quiet, preview }, overwrite } => {
             let file = scene.display().to_string();
             let parsed = match set_threads(threads).and_then(|()| load_scene(&scene, &set)) {
                 Ok(s) => s,
@@ -394,7 +391,7 @@ fn main() -> ExitCode {
             };
             finish_run(run(&parsed, &file, &options), &options.out_dir, &parsed.name)
         }
-        Command::Resume { dir, set, backend, threads, quiet, preview } => {
+        Command::Resume { dir, set, execution: Execution { backend, threads, quiet, preview } } => {
             if let Err(e) = set_threads(threads) {
                 eprintln!("error: {e}");
                 return ExitCode::from(2);

@@ -131,6 +131,24 @@ fn a_run_killed_mid_write_leaves_only_whole_frames() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Runs `coil` with `args`, sends it SIGINT (Ctrl-C) once `out` holds its fourth frame, and
+/// returns how it ended, with its stderr.
+#[cfg(unix)]
+fn interrupted_run(args: &[&str], out: &std::path::Path) -> std::process::Output {
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_coil"))
+        .args(args)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("coil starts");
+    let started = std::time::Instant::now();
+    while !out.join("frame_000003.vtu").is_file() && started.elapsed() < std::time::Duration::from_secs(60) {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let sent = std::process::Command::new("kill").args(["-s", "INT", &child.id().to_string()]).status().expect("kill runs");
+    assert!(sent.success());
+    child.wait_with_output().expect("reaped")
+}
+
 /// Ctrl-C (SIGINT) stops a run after its step: exit code 130, the log says "interrupted" with
 /// the summary, and every frame written is kept and listed.
 #[cfg(unix)]
@@ -139,19 +157,18 @@ fn an_interrupted_run_logs_its_summary_and_keeps_its_frames() {
     let dir = std::env::temp_dir().join(format!("coil-interrupt-{}", std::process::id()));
     let out = dir.join("out");
     let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
-    let child = std::process::Command::new(env!("CARGO_BIN_EXE_coil"))
-        .args(["run", scene.to_str().expect("utf-8"), "--quiet", "--set", "output.every_steps=5"])
-        .args(["--out", out.to_str().expect("utf-8")])
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("coil starts");
-    let started = std::time::Instant::now();
-    while !out.join("frame_000003.vtu").is_file() && started.elapsed() < std::time::Duration::from_secs(60) {
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    let sent = std::process::Command::new("kill").args(["-s", "INT", &child.id().to_string()]).status().expect("kill runs");
-    assert!(sent.success());
-    let ended = child.wait_with_output().expect("reaped");
+    let ended = interrupted_run(
+        &[
+            "run",
+            scene.to_str().expect("utf-8"),
+            "--quiet",
+            "--set",
+            "output.every_steps=5",
+            "--out",
+            out.to_str().expect("utf-8"),
+        ],
+        &out,
+    );
     let stderr = String::from_utf8_lossy(&ended.stderr);
     assert_eq!(ended.status.code(), Some(130), "{stderr}");
     assert!(stderr.contains("interrupted at step"), "{stderr}");
@@ -225,19 +242,10 @@ fn a_run_stopped_by_ctrl_c_resumes_to_the_frames_of_one_never_stopped() {
     let done = common::coil(&[&["run", scene, "--quiet", "--out", whole.to_str().expect("utf-8")], &settings[..]].concat());
     assert!(done.status.success(), "{}", String::from_utf8_lossy(&done.stderr));
 
-    let child = std::process::Command::new(env!("CARGO_BIN_EXE_coil"))
-        .args(["run", scene, "--quiet", "--out", stopped.to_str().expect("utf-8")])
-        .args(settings)
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("coil starts");
-    let started = std::time::Instant::now();
-    while !stopped.join("frame_000003.vtu").is_file() && started.elapsed() < std::time::Duration::from_secs(60) {
-        std::thread::sleep(std::time::Duration::from_millis(5));
-    }
-    let sent = std::process::Command::new("kill").args(["-s", "INT", &child.id().to_string()]).status().expect("kill runs");
-    assert!(sent.success());
-    let ended = child.wait_with_output().expect("reaped");
+    let ended = interrupted_run(
+        &[&["run", scene, "--quiet", "--out", stopped.to_str().expect("utf-8")], &settings[..]].concat(),
+        &stopped,
+    );
     let stderr = String::from_utf8_lossy(&ended.stderr);
     assert_eq!(ended.status.code(), Some(130), "stopped before the end: {stderr}");
     assert!(stderr.contains(&format!("`coil resume {}` continues it", stopped.display())), "{stderr}");
