@@ -389,7 +389,7 @@ fn main() -> ExitCode {
                 overwrite,
                 stop: Some(coil::interrupt::watch()),
             };
-            finish_run(run(&parsed, &file, &options), &options.out_dir, &parsed.name)
+            finish_run(run(&parsed, &file, &options), &options.out_dir)
         }
         Command::Resume { dir, set, execution: Execution { backend, threads, quiet, preview } } => {
             if let Err(e) = set_threads(threads) {
@@ -397,20 +397,21 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             }
             let options = ResumeOptions { backend: backend.backend(), quiet, preview, set, stop: Some(coil::interrupt::watch()) };
-            let result = resume(&dir, &options);
-            let name = coil::scene::Scene::load(&dir.join("run.json")).map(|s| s.name).unwrap_or_default();
-            finish_run(result, &dir, &name)
+            finish_run(resume(&dir, &options), &dir)
         }
     }
 }
 
 /// Prints how a run or a resumed run ended, and its exit code: 0 done, 2 bad input, 1 output
 /// or device failure, 3 unstable, 130 interrupted.
-fn finish_run(result: Result<Summary, RunError>, out_dir: &Path, name: &str) -> ExitCode {
+fn finish_run(result: Result<Summary, RunError>, out_dir: &Path) -> ExitCode {
     match result {
         Ok(summary) => {
             println!("{summary}");
-            println!("frames in {} (open {name}.pvd in ParaView)", out_dir.display());
+            match &summary.series {
+                Some(series) => println!("frames in {} (open {} in ParaView)", out_dir.display(), series.display()),
+                None => println!("frames in {}", out_dir.display()),
+            }
             ExitCode::SUCCESS
         }
         Err(e) => {

@@ -111,6 +111,9 @@ pub struct Summary {
     /// When (s) the fluid capacity (`simulation.max_fluid_particles`) stopped the inlets, and
     /// that capacity.
     pub capacity_reached: Option<(f64, usize)>,
+    /// The `.pvd` series that ParaView opens, where the run writes `.vtu` frames.
+    #[serde(skip)]
+    pub series: Option<PathBuf>,
 }
 
 impl fmt::Display for Summary {
@@ -589,12 +592,11 @@ fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
     let mut tally = resumed.unwrap_or(Tally { next_frame_time: every_s.unwrap_or(f64::INFINITY), ..Tally::default() });
     let earlier_wall_s = tally.wall_s;
     let expected_frames = every_s.map(|e| (end / e).ceil() as usize + 1).unwrap_or(1024);
-    let listed = if scene.output.formats.contains(&FrameFormat::Vtu) {
-        tally.frame_times.iter().enumerate().map(|(k, &t)| (t, frame_name(k))).collect()
-    } else {
-        Vec::new()
-    };
-    let mut series = Series::new(dir.join(format!("{}.pvd", scene.name)), expected_frames, listed);
+    let writes_series = scene.output.formats.contains(&FrameFormat::Vtu);
+    let series_path = dir.join(format!("{}.pvd", scene.name));
+    let listed =
+        if writes_series { tally.frame_times.iter().enumerate().map(|(k, &t)| (t, frame_name(k))).collect() } else { Vec::new() };
+    let mut series = Series::new(series_path.clone(), expected_frames, listed);
     let mut frame = Frame::default();
     let started = Instant::now();
     let mut write_frame = |sim: &Simulation<R, M>, tally: &mut Tally| -> Result<(), RunError> {
@@ -621,7 +623,7 @@ fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
             let png = path.with_extension("png");
             image.save(&png).map_err(|e| io_error("preview", &png, e))?;
         }
-        if scene.output.formats.contains(&FrameFormat::Vtu) {
+        if writes_series {
             series.push(sim.time, &name).map_err(|e| io_error("series", series.path(), e))?;
         }
         tally.frame_times.push(sim.time);
@@ -654,6 +656,7 @@ fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
             removed: sim.removed,
             frames: tally.frame_times.len(),
             capacity_reached: sim.capacity_reached_at.map(|t| (t, sim.fluid_capacity())),
+            series: writes_series.then(|| series_path.clone()),
         }
     };
     let stopped = |stop: StepStop, s: Summary| match stop {

@@ -209,6 +209,26 @@ fn frames_also_as_binary_ply_and_splashsurf_xyz() {
     assert_eq!(ply.len() - end, 44 * n);
     let last_id = u32::from_le_bytes(ply[ply.len() - 4..].try_into().expect("4 bytes"));
     assert_eq!(last_id, frame.id[n - 1]);
+    let series = dir.join("dam_break.pvd");
+    assert!(series.is_file());
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains(&format!("(open {} in ParaView)", series.display())), "{stdout}");
+
+    std::fs::remove_dir_all(&dir).ok();
+    let ply_only = common::coil(&[
+        "run",
+        scene.to_str().expect("utf-8"),
+        "--quiet",
+        "--out",
+        dir.to_str().expect("utf-8"),
+        "--set",
+        "simulation.end_time_s=0.0004",
+        "--set",
+        r#"output.formats=["ply"]"#,
+    ]);
+    assert!(ply_only.status.success(), "{}", String::from_utf8_lossy(&ply_only.stderr));
+    let stdout = String::from_utf8_lossy(&ply_only.stdout);
+    assert!(!series.exists() && !stdout.contains(".pvd"), "no series is written or named without .vtu frames: {stdout}");
     std::fs::remove_dir_all(&dir).ok();
 }
 
