@@ -6,6 +6,15 @@ use coil::preview::{render, render_frame, Coloring, View};
 
 mod common;
 
+/// The arguments of `coil run scenes/dam_break.toml --quiet --out OUT`, with `--set` before
+/// each of `settings`.
+fn dam_break_run(out: &std::path::Path, settings: &[&str]) -> Vec<String> {
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    let mut args = vec!["run".into(), scene.display().to_string(), "--quiet".into(), "--out".into(), out.display().to_string()];
+    args.extend(settings.iter().flat_map(|s| ["--set".to_string(), s.to_string()]));
+    args
+}
+
 /// Positions, velocities, viscosities and ids of a test cloud.
 type Cloud = (Vec<[f64; 3]>, Vec<[f32; 3]>, Vec<f32>, Vec<u32>);
 
@@ -88,17 +97,8 @@ fn a_run_killed_mid_write_leaves_only_whole_frames() {
     let out = dir.join("out");
     std::fs::create_dir_all(&dir).expect("temp dir");
     // A frame every step, so the kill is likely to land inside a write.
-    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_coil"))
-        .args([
-            "run",
-            scene.to_str().expect("utf-8"),
-            "--quiet",
-            "--set",
-            "output.every_steps=1",
-            "--out",
-            out.to_str().expect("utf-8"),
-        ])
+        .args(dam_break_run(&out, &["output.every_steps=1"]))
         .spawn()
         .expect("coil starts");
     let frames = |out: &std::path::Path| {
@@ -134,7 +134,7 @@ fn a_run_killed_mid_write_leaves_only_whole_frames() {
 /// Runs `coil` with `args`, sends it SIGINT (Ctrl-C) once `out` holds its fourth frame, and
 /// returns how it ended, with its stderr.
 #[cfg(unix)]
-fn interrupted_run(args: &[&str], out: &std::path::Path) -> std::process::Output {
+fn interrupted_run(args: &[String], out: &std::path::Path) -> std::process::Output {
     let child = std::process::Command::new(env!("CARGO_BIN_EXE_coil"))
         .args(args)
         .stderr(std::process::Stdio::piped())
@@ -156,19 +156,7 @@ fn interrupted_run(args: &[&str], out: &std::path::Path) -> std::process::Output
 fn an_interrupted_run_logs_its_summary_and_keeps_its_frames() {
     let dir = std::env::temp_dir().join(format!("coil-interrupt-{}", std::process::id()));
     let out = dir.join("out");
-    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
-    let ended = interrupted_run(
-        &[
-            "run",
-            scene.to_str().expect("utf-8"),
-            "--quiet",
-            "--set",
-            "output.every_steps=5",
-            "--out",
-            out.to_str().expect("utf-8"),
-        ],
-        &out,
-    );
+    let ended = interrupted_run(&dam_break_run(&out, &["output.every_steps=5"]), &out);
     let stderr = String::from_utf8_lossy(&ended.stderr);
     assert_eq!(ended.status.code(), Some(130), "{stderr}");
     assert!(stderr.contains("interrupted at step"), "{stderr}");
@@ -188,12 +176,7 @@ fn an_interrupted_run_logs_its_summary_and_keeps_its_frames() {
 #[test]
 fn frames_also_as_binary_ply_and_splashsurf_xyz() {
     let dir = std::env::temp_dir().join(format!("coil-formats-{}", std::process::id()));
-    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_coil"))
-        .args(["run", scene.to_str().expect("utf-8"), "--quiet", "--out", dir.to_str().expect("utf-8")])
-        .args(["--set", "simulation.end_time_s=0.0004", "--set", r#"output.formats=["vtu", "ply", "xyz"]"#])
-        .output()
-        .expect("coil runs");
+    let out = common::coil(&dam_break_run(&dir, &["simulation.end_time_s=0.0004", r#"output.formats=["vtu", "ply", "xyz"]"#]));
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let frame = coil::output::vtu_read::read_frame(&dir.join("frame_000000.vtu")).expect("vtu");
     let n = frame.position.len();
@@ -215,17 +198,7 @@ fn frames_also_as_binary_ply_and_splashsurf_xyz() {
     assert!(stdout.contains(&format!("(open {} in ParaView)", series.display())), "{stdout}");
 
     std::fs::remove_dir_all(&dir).ok();
-    let ply_only = common::coil(&[
-        "run",
-        scene.to_str().expect("utf-8"),
-        "--quiet",
-        "--out",
-        dir.to_str().expect("utf-8"),
-        "--set",
-        "simulation.end_time_s=0.0004",
-        "--set",
-        r#"output.formats=["ply"]"#,
-    ]);
+    let ply_only = common::coil(&dam_break_run(&dir, &["simulation.end_time_s=0.0004", r#"output.formats=["ply"]"#]));
     assert!(ply_only.status.success(), "{}", String::from_utf8_lossy(&ply_only.stderr));
     let stdout = String::from_utf8_lossy(&ply_only.stdout);
     assert!(!series.exists() && !stdout.contains(".pvd"), "no series is written or named without .vtu frames: {stdout}");
@@ -256,16 +229,11 @@ fn run_log(dir: &std::path::Path) -> serde_json::Value {
 fn a_run_stopped_by_ctrl_c_resumes_to_the_frames_of_one_never_stopped() {
     let dir = std::env::temp_dir().join(format!("coil-resume-{}", std::process::id()));
     let (whole, stopped) = (dir.join("whole"), dir.join("stopped"));
-    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
-    let scene = scene.to_str().expect("utf-8");
-    let settings = ["--set", "output.every_steps=20", "--set", "simulation.end_time_s=0.06"];
-    let done = common::coil(&[&["run", scene, "--quiet", "--out", whole.to_str().expect("utf-8")], &settings[..]].concat());
+    let settings = ["output.every_steps=20", "simulation.end_time_s=0.06"];
+    let done = common::coil(&dam_break_run(&whole, &settings));
     assert!(done.status.success(), "{}", String::from_utf8_lossy(&done.stderr));
 
-    let ended = interrupted_run(
-        &[&["run", scene, "--quiet", "--out", stopped.to_str().expect("utf-8")], &settings[..]].concat(),
-        &stopped,
-    );
+    let ended = interrupted_run(&dam_break_run(&stopped, &settings), &stopped);
     let stderr = String::from_utf8_lossy(&ended.stderr);
     assert_eq!(ended.status.code(), Some(130), "stopped before the end: {stderr}");
     assert!(stderr.contains(&format!("`coil resume {}` continues it", stopped.display())), "{stderr}");
@@ -317,16 +285,7 @@ fn a_run_stopped_by_ctrl_c_resumes_to_the_frames_of_one_never_stopped() {
 fn resume_refuses_what_it_cannot_continue() {
     let dir = std::env::temp_dir().join(format!("coil-resume-refused-{}", std::process::id()));
     let out = dir.join("run");
-    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
-    let done = common::coil(&[
-        "run",
-        scene.to_str().expect("utf-8"),
-        "--quiet",
-        "--set",
-        "simulation.end_time_s=0.002",
-        "--out",
-        out.to_str().expect("utf-8"),
-    ]);
+    let done = common::coil(&dam_break_run(&out, &["simulation.end_time_s=0.002"]));
     assert!(done.status.success(), "{}", String::from_utf8_lossy(&done.stderr));
     let refused_with = |set: &str, expected: &str| {
         let r = common::coil(&["resume", out.to_str().expect("utf-8"), "--quiet", "--set", set]);
@@ -408,23 +367,16 @@ fn a_jet_stopped_by_its_program_resumes_where_it_was() {
 #[test]
 fn an_unstable_run_resumes_from_its_last_frame_with_a_smaller_dt() {
     let dir = std::env::temp_dir().join(format!("coil-resume-unstable-{}", std::process::id()));
-    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
     // 15 times the bound (2e-4 s): the guard stops it at t = 0.066 s, after the frame at 0.06 s.
-    let r = common::coil(&[
-        "run",
-        scene.to_str().expect("utf-8"),
-        "--quiet",
-        "--out",
-        dir.to_str().expect("utf-8"),
-        "--set",
-        "simulation.time_step.fixed_s=0.003",
-        "--set",
-        "simulation.time_step.allow_above_stability_bound=true",
-        "--set",
-        "output.every_s=0.02",
-        "--set",
-        "simulation.end_time_s=0.1",
-    ]);
+    let r = common::coil(&dam_break_run(
+        &dir,
+        &[
+            "simulation.time_step.fixed_s=0.003",
+            "simulation.time_step.allow_above_stability_bound=true",
+            "output.every_s=0.02",
+            "simulation.end_time_s=0.1",
+        ],
+    ));
     let stderr = String::from_utf8_lossy(&r.stderr);
     assert_eq!(r.status.code(), Some(3), "{stderr}");
     assert!(stderr.contains("--set simulation.time_step.fixed_s=2.000e-4` continues it"), "the bound: {stderr}");

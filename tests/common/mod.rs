@@ -81,7 +81,7 @@ speed_m_s = 0.5
 }
 
 /// Runs the `coil` binary with `args`.
-pub fn coil(args: &[&str]) -> Output {
+pub fn coil<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_coil")).args(args).output().expect("coil runs")
 }
 
