@@ -181,7 +181,7 @@ pub fn encode<R: Real, M: Model<R>>(sim: &Simulation<R, M>, scene: &Scene, tally
     w.u64(sim.fluid_count() as u64);
     w.u32(sim.next_id);
     w.f64(diagnostics.max_speed);
-    w.f64(diagnostics.max_density_error);
+    w.f64(diagnostics.max_compression);
     w.u64(diagnostics.bad_particles);
     w.f64(sim.last_dt);
     w.u8(limit_code(sim.last_limit));
@@ -195,7 +195,7 @@ pub fn encode<R: Real, M: Model<R>>(sim: &Simulation<R, M>, scene: &Scene, tally
     w.f64s(&tally.frame_times);
     w.f64(tally.next_frame_time);
     w.f64(tally.particle_steps);
-    w.f64(tally.max_density_error);
+    w.f64(tally.max_compression);
     w.f64(tally.max_speed);
     w.f64(tally.wall_s);
     w.u64(n as u64);
@@ -259,7 +259,7 @@ impl Checkpoint {
         let next_id = r.u32("the next id")?;
         let diagnostics = Diagnostics {
             max_speed: r.f64("the diagnostics")?,
-            max_density_error: r.f64("the diagnostics")?,
+            max_compression: r.f64("the diagnostics")?,
             bad_particles: r.u64("the diagnostics")?,
         };
         let last_dt = r.f64("the last dt")?;
@@ -274,7 +274,7 @@ impl Checkpoint {
             frame_times,
             next_frame_time: r.f64("the frame schedule")?,
             particle_steps: r.f64("the summary's figures")?,
-            max_density_error: r.f64("the summary's figures")?,
+            max_compression: r.f64("the summary's figures")?,
             max_speed: r.f64("the summary's figures")?,
             wall_s: r.f64("the summary's figures")?,
         };

@@ -102,7 +102,8 @@ pub struct Summary {
     pub particle_steps_per_s: f64,
     pub fluid_particles: usize,
     pub boundary_particles: usize,
-    pub max_density_error: f64,
+    /// Largest compression (rho - rho0) / rho0 over the fluid and the steps checked.
+    pub max_compression: f64,
     pub max_speed_m_s: f64,
     /// Largest speed over c.
     pub max_mach: f64,
@@ -123,7 +124,7 @@ impl fmt::Display for Summary {
         writeln!(f, "wall time              {:.2} s", self.wall_s)?;
         writeln!(f, "particle-steps/s       {:.3e}", self.particle_steps_per_s)?;
         writeln!(f, "particles              {} fluid, {} boundary", self.fluid_particles, self.boundary_particles)?;
-        writeln!(f, "max |rho-rho0|/rho0    {:.3e}", self.max_density_error)?;
+        writeln!(f, "max compression        {:.3e} ((rho-rho0)/rho0)", self.max_compression)?;
         writeln!(f, "max speed              {:.4} m/s (Mach {:.3})", self.max_speed_m_s, self.max_mach)?;
         writeln!(f, "removed (left domain)  {}", self.removed)?;
         write!(f, "frames                 {}", self.frames)?;
@@ -563,7 +564,7 @@ pub struct Tally {
     pub next_frame_time: f64,
     /// Particles moved, summed over steps.
     pub particle_steps: f64,
-    pub max_density_error: f64,
+    pub max_compression: f64,
     /// Largest fluid speed over all steps (m/s).
     pub max_speed: f64,
     /// Wall time the run has taken (s): before this process, then up to the last checkpoint.
@@ -650,7 +651,7 @@ fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
             particle_steps_per_s: if wall > 0.0 { tally.particle_steps / wall } else { 0.0 },
             fluid_particles: sim.fluid_count(),
             boundary_particles: sim.boundary_count(),
-            max_density_error: tally.max_density_error,
+            max_compression: tally.max_compression,
             max_speed_m_s: tally.max_speed,
             max_mach: tally.max_speed / scene.material.sound_speed_m_s,
             removed: sim.removed,
@@ -673,7 +674,7 @@ fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
         }
         let sim = state.sim();
         tally.particle_steps += state.particle_count() as f64;
-        tally.max_density_error = tally.max_density_error.max(sim.diagnostics.max_density_error);
+        tally.max_compression = tally.max_compression.max(sim.diagnostics.max_compression);
         tally.max_speed = tally.max_speed.max(sim.diagnostics.max_speed);
         let due = match every_steps {
             Some(k) => sim.steps % k == 0,

@@ -394,7 +394,7 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         })
     }
 
-    /// Largest speed and density error over the fluid, and how many fluid particles run away.
+    /// Largest speed and compression over the fluid, and how many fluid particles run away.
     pub fn measure(&self) -> Diagnostics {
         let p = &self.particles;
         let n = p.len();

@@ -5,7 +5,7 @@
 //! particle arrays are a mirror filled only for output frames. Inside a step nothing waits for
 //! the device: kernels read the particle count from device memory, and the host launches
 //! threads for an upper bound (`bound`). Every `check_every` steps, and before every frame, the
-//! host reads the diagnostics (largest speed, density error, runaway particles) and the count.
+//! host reads the diagnostics (largest speed, compression, runaway particles) and the count.
 
 use super::device_array::{vec3_view, vec3_view_mut, vec3_zeros, DeviceArray, DeviceVec3};
 use super::gpu::{ByValue, CudaError, Gpu};

@@ -1,4 +1,4 @@
-//! Figures of the fluid's state that guard a run (largest speed, density error, runaway
+//! Figures of the fluid's state that guard a run (largest speed, compression, runaway
 //! particles), combined over contiguous ranges of particles. The CPU backend reduces the ranges
 //! with rayon every step; the CUDA backend writes one figure per range on the device and the
 //! host combines them when it checks the run.
@@ -13,8 +13,10 @@ use crate::view::{Vec3View, View, ViewMut};
 pub struct StateFigures {
     /// Largest finite speed (m/s).
     pub max_speed: f64,
-    /// Largest |rho - rho0| / rho0.
-    pub max_density_error: f64,
+    /// Largest compression (rho - rho0) / rho0, 0 where none is compressed: the weak
+    /// compressibility that the sound speed bounds. A density deficit (a free surface's kernel
+    /// sum cut off, or a particle flying alone) is not compression and is not counted.
+    pub max_compression: f64,
     /// Fluid particles with a non-finite velocity or a speed above the runaway limit.
     pub bad_particles: u64,
 }
@@ -25,10 +27,10 @@ impl StateFigures {
     pub fn combine(self, other: Self) -> Self {
         Self {
             max_speed: if other.max_speed > self.max_speed { other.max_speed } else { self.max_speed },
-            max_density_error: if other.max_density_error > self.max_density_error {
-                other.max_density_error
+            max_compression: if other.max_compression > self.max_compression {
+                other.max_compression
             } else {
-                self.max_density_error
+                self.max_compression
             },
             bad_particles: self.bad_particles + other.bad_particles,
         }
@@ -58,10 +60,10 @@ pub fn particle_figures<R: Real>(i: usize, a: &DiagnosticsArgs<R>) -> StateFigur
     let speed2 = x * x + y * y + z * z;
     let finite = speed2.is_finite();
     let rho0 = a.fluid.rest_density.to_f64();
-    let error = a.density.at(i).to_f64() - rho0;
+    let excess = a.density.at(i).to_f64() - rho0;
     StateFigures {
         max_speed: if finite { Real::sqrt(speed2) } else { 0.0 },
-        max_density_error: if error < 0.0 { -error / rho0 } else { error / rho0 },
+        max_compression: if excess > 0.0 { excess / rho0 } else { 0.0 },
         bad_particles: u64::from(!finite || speed2 > a.runaway_speed2),
     }
 }
