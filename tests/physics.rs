@@ -1,4 +1,5 @@
 //! Whole-particle-system checks: gradients, conservation, rest, neighbors, reproducibility.
+#![allow(clippy::needless_range_loop, reason = "a loop over the axes indexes several per-axis arrays at once")]
 
 mod common;
 

@@ -293,7 +293,10 @@ fn a_period_of_three_support_radii_written_in_decimal_is_accepted() {
              [simulation]\nend_time_s = 0.1\n[[fluid_block]]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [{length}, 0.001, {length}]\n"
         )
     };
-    const { assert!(0.0003 < 3.0 * (5e-5 * 2.0), "the decimal period is below 3 h in binary") };
+    #[allow(clippy::assertions_on_constants, reason = "the premise is about binary rounding, checked at compile time")]
+    const {
+        assert!(0.0003 < 3.0 * (5e-5 * 2.0), "the decimal period is below 3 h in binary")
+    };
     let scene = Scene::parse(&text("0.0003"), "channel.toml").expect("a period of 3 h is valid");
     let d = &scene.domain;
     let grid = NeighborGrid::new(d.min_m, d.max_m, scene.support_radius(), d.periodic, 1);

@@ -17,6 +17,7 @@
 //! [`leapfrog::leapfrog_pass`]; then [`diagnostics`] guards the run.
 #![no_std]
 #![allow(clippy::neg_cmp_op_on_partial_ord, reason = "`!(a < b)` is how a check here also refuses NaN")]
+#![allow(clippy::needless_range_loop, reason = "a loop over the axes indexes several per-axis arrays at once")]
 #![cfg_attr(target_arch = "nvptx64", feature(abi_ptx, link_llvm_intrinsics, stdarch_nvptx))]
 // `link_llvm_intrinsics` is how the device reaches NVVM's fast math (see `real`).
 #![cfg_attr(target_arch = "nvptx64", allow(internal_features))]
