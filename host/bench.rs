@@ -354,7 +354,7 @@ pub fn bench(options: &BenchOptions, progress: impl FnMut(&Measurement)) -> Resu
     bench_on(open_gpu(options)?, options, progress)
 }
 
-/// [`bench`] on a device already opened (the emulated one, in tests), which the `cuda`
+/// [`bench()`] on a device already opened (the emulated one, in tests), which the `cuda`
 /// measurements need.
 pub fn bench_on(
     mut gpu: Option<Device>,

@@ -1,4 +1,4 @@
-//! The smoothing kernels of Müller, Charypar & Gross 2003 (the paper's [23]), support radius `h`.
+//! The smoothing kernels of Müller, Charypar & Gross 2003 (the paper's \[23\]), support radius `h`.
 
 use crate::real::Real;
 use crate::vec3::Vec3;
