@@ -735,7 +735,7 @@ fn rigid_rotation_spin_down_rates() -> [f64; 4] {
 /// A rigid rotation has no rate of strain, so an exact viscous term leaves it alone. The SPH
 /// Laplacians do not: at the free surface their one-sided sums of v_j - v_i pull each particle
 /// back against its motion, a spurious traction of order rho nu omega that spins a small
-/// ball down faster than any of its viscous modes decays (nu / R^2, R = 3.5 spacings). The
+/// ball down at a few times nu / R^2 (R = 3.5 spacings) where an exact operator gives zero. The
 /// paper's operator sees only the rate of strain Eq. (8) then (2) makes of it, which the
 /// surface's kernel deficit leaves small but not zero. Measured: 304 and 315 1/s for Müller's
 /// and Morris's, 14.7 1/s for the paper's, 14.0 1/s with hourglass control; nu / R^2 = 81.6
