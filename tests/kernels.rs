@@ -516,37 +516,57 @@ fn a_symmetric_solve_inverts_and_refuses_a_flat_tensor() {
     assert_eq!(flat.solve(b), None);
 }
 
-/// The viscous acceleration (m/s^2) of the particle nearest the centre of a 12^3 lattice
-/// (spacing 0.01 m, h = 2 spacings, calibrated as every run is, at rest density) whose
-/// velocity is `velocity_at`, by the paper's operator with hourglass control of weight
-/// `coefficient`, and by Morris's operator; nu = 0.1 m^2/s.
-fn lattice_viscous_accelerations(velocity_at: impl Fn([f64; 3]) -> [f64; 3], coefficient: f64) -> (Vec3<f64>, Vec3<f64>) {
-    use coil::neighbor_grid::NeighborGrid;
-    use coil::particles::{mat3_view_mut, vec3_view, ModelFields, Particles};
+/// Rest density of [`sorted_lattice`]'s fluid (kg/m^3).
+const LATTICE_REST_DENSITY: f64 = 1000.0;
+/// Spacing of [`sorted_lattice`] (m).
+const LATTICE_SPACING: f64 = 0.01;
+
+/// The sites of a `cells`^3 cubic lattice that `keep` accepts, as particles moving at
+/// `velocity_at`, sorted into their neighbor grid (h = 2 spacings), and the fluid with the mass
+/// and kernels calibrated on that lattice as every run's are.
+fn sorted_lattice(
+    cells: usize,
+    fields: coil::particles::ModelFields,
+    keep: impl Fn([f64; 3]) -> bool,
+    velocity_at: impl Fn([f64; 3]) -> [f64; 3],
+) -> (coil::particles::Particles<f64>, coil::neighbor_grid::NeighborGrid, Fluid<f64>) {
     use coil::setup::{calibrated_kernels, calibrated_mass};
-    use coil_kernels::acceleration::{acceleration, MorrisViscosity};
-    use coil_kernels::hourglass_control::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
-    use coil_kernels::view::ViewMut;
-    let (s, h, rho0, nu0) = (0.01, 0.02, 1000.0, 0.1);
-    let fields = ModelFields { viscosity: true, velocity_gradient: true, ..ModelFields::default() };
-    let mut p = Particles::<f64>::with_capacity(12 * 12 * 12, fields);
-    for k in 0..12 {
-        for j in 0..12 {
-            for i in 0..12 {
+    let (rho0, s) = (LATTICE_REST_DENSITY, LATTICE_SPACING);
+    let h = 2.0 * s;
+    let mut p = coil::particles::Particles::<f64>::with_capacity(cells * cells * cells, fields);
+    for k in 0..cells {
+        for j in 0..cells {
+            for i in 0..cells {
                 let x = [i, j, k].map(|c| (c as f64 + 0.5) * s);
-                p.push(p.len() as u32, x, velocity_at(x));
+                if keep(x) {
+                    p.push(p.len() as u32, x, velocity_at(x));
+                }
             }
         }
     }
-    let mut grid = NeighborGrid::new([0.0; 3], [0.12; 3], h, [false; 3], p.capacity());
+    let mut grid = coil::neighbor_grid::NeighborGrid::new([0.0; 3], [cells as f64 * s; 3], h, [false; 3], p.capacity());
     grid.sort(&mut p);
-    let n = p.len();
-    p.density[..n].fill(rho0);
     let fluid = Fluid {
         mass: calibrated_mass(rho0, s, h, DensityKernel::Poly6),
         kernels: calibrated_kernels(rho0, s, h, DensityKernel::Poly6),
         ..fluid::<f64>()
     };
+    (p, grid, fluid)
+}
+
+/// The viscous acceleration (m/s^2) of the particle nearest the centre of a 12^3
+/// [`sorted_lattice`] at rest density whose velocity is `velocity_at`, by the paper's operator
+/// with hourglass control of weight `coefficient`, and by Morris's operator; nu = 0.1 m^2/s.
+fn lattice_viscous_accelerations(velocity_at: impl Fn([f64; 3]) -> [f64; 3], coefficient: f64) -> (Vec3<f64>, Vec3<f64>) {
+    use coil::particles::{mat3_view_mut, vec3_view, ModelFields};
+    use coil_kernels::acceleration::{acceleration, MorrisViscosity};
+    use coil_kernels::hourglass_control::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
+    use coil_kernels::view::ViewMut;
+    let nu0 = 0.1;
+    let fields = ModelFields { viscosity: true, velocity_gradient: true, ..ModelFields::default() };
+    let (mut p, grid, fluid) = sorted_lattice(12, fields, |_| true, velocity_at);
+    let n = p.len();
+    p.density[..n].fill(LATTICE_REST_DENSITY);
     let centre = (0..n)
         .min_by(|&a, &b| {
             let d = |i: usize| (0..3).map(|c| (p.position[c][i] - 0.06).powi(2)).sum::<f64>();
@@ -657,42 +677,27 @@ fn a_grid_of_many_scan_chunks_sorts_every_particle_into_its_cell() {
     }
 }
 
-/// Spin-down rate (1/s) each viscous operator gives a ball of fluid (radius 3.5 spacings on a
-/// lattice, spacing 0.01 m, h = 2 spacings, densities by Eq. (5), nu = 0.1 m^2/s) turning
+/// Spin-down rate (1/s) each viscous operator gives a ball of fluid (radius 3.5 spacings of
+/// [`sorted_lattice`], densities by Eq. (5), nu = 0.1 m^2/s) turning
 /// rigidly about y: minus the viscous torque about the axis over the angular momentum.
 /// Returned for the paper's operator, with hourglass control 1, Müller's and Morris's.
 fn rigid_rotation_spin_down_rates() -> [f64; 4] {
-    use coil::neighbor_grid::NeighborGrid;
-    use coil::particles::{mat3_view_mut, stress_view_mut, vec3_view, ModelFields, Particles};
-    use coil::setup::{calibrated_kernels, calibrated_mass};
+    use coil::particles::{mat3_view_mut, stress_view_mut, vec3_view, ModelFields};
     use coil_kernels::acceleration::{acceleration, MorrisViscosity, StressDivergence, VelocityLaplacian};
     use coil_kernels::density::{density_pass, DensityArgs, Poly6};
     use coil_kernels::hourglass_control::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
     use coil_kernels::velocity_gradient::{stress_pass, StressArgs};
     use coil_kernels::view::ViewMut;
-    let (s, h, rho0, nu0, omega) = (0.01, 0.02, 1000.0, 0.1, 1.0);
-    let centre = 0.1;
+    let (nu0, omega, centre) = (0.1, 1.0, 0.1);
     let fields = ModelFields { stress: true, viscosity: true, velocity_gradient: true };
-    let mut p = Particles::<f64>::with_capacity(20 * 20 * 20, fields);
-    for k in 0..20 {
-        for j in 0..20 {
-            for i in 0..20 {
-                let x = [i, j, k].map(|c| (c as f64 + 0.5) * s);
-                let d = x.map(|c| c - centre);
-                if d.iter().map(|c| c * c).sum::<f64>().sqrt() <= 3.5 * s {
-                    p.push(p.len() as u32, x, [omega * d[2], 0.0, -omega * d[0]]);
-                }
-            }
-        }
-    }
-    let mut grid = NeighborGrid::new([0.0; 3], [0.2; 3], h, [false; 3], p.capacity());
-    grid.sort(&mut p);
-    let n = p.len();
-    let fluid = Fluid {
-        mass: calibrated_mass(rho0, s, h, DensityKernel::Poly6),
-        kernels: calibrated_kernels(rho0, s, h, DensityKernel::Poly6),
-        ..fluid::<f64>()
+    let offset = |x: [f64; 3]| x.map(|c| c - centre);
+    let in_ball = |x: [f64; 3]| offset(x).iter().map(|c| c * c).sum::<f64>().sqrt() <= 3.5 * LATTICE_SPACING;
+    let turning = |x: [f64; 3]| {
+        let d = offset(x);
+        [omega * d[2], 0.0, -omega * d[0]]
     };
+    let (mut p, grid, fluid) = sorted_lattice(20, fields, in_ball, turning);
+    let n = p.len();
     let nb = grid.neighborhood(vec3_view(&p.position, n), Open);
     {
         let args = DensityArgs { neighborhood: nb, fluid, density: ViewMut::new(&mut p.density[..n]) };
@@ -745,7 +750,7 @@ fn rigid_rotation_spin_down_rates() -> [f64; 4] {
 #[test]
 fn the_laplacians_brake_a_rigid_rotation_that_the_papers_operator_leaves_nearly_free() {
     let [paper, controlled, muller, morris] = rigid_rotation_spin_down_rates();
-    let nu_over_r2 = 0.1 / (3.5f64 * 0.01).powi(2);
+    let nu_over_r2 = 0.1 / (3.5 * LATTICE_SPACING).powi(2);
     eprintln!(
         "spin-down of a rigidly turning ball (1/s): paper's {paper:.1}, with hourglass control {controlled:.1}, \
          Müller's {muller:.1}, Morris's {morris:.1}; nu / R^2 = {nu_over_r2:.1}"
