@@ -713,15 +713,19 @@ fn rigid_rotation_spin_down_rates() -> [f64; 4] {
     let args =
         VelocityGradientArgs { neighborhood: nb, fluid, rheology: Newtonian { nu0 }, velocity, density, gradient, viscosity };
     (0..n).for_each(|i| velocity_gradient_pass(i, &args));
+    // Pressure and gravity, which every operator's acceleration includes, to subtract.
     let inviscid = VelocityLaplacian { nu0: 0.0, velocity };
+    let inviscid: Vec<Vec3<f64>> = (0..n).map(|i| acceleration(i, &nb, &density, &fluid, &inviscid)).collect();
+    let arm = |i: usize| (p.position[0][i] - centre, p.position[2][i] - centre);
+    let angular_momentum: f64 = (0..n).map(arm).map(|(dx, dz)| omega * (dx * dx + dz * dz)).sum();
     let rate = |viscous_at: &dyn Fn(usize) -> Vec3<f64>| {
-        let (mut torque, mut angular_momentum) = (0.0, 0.0);
-        for i in 0..n {
-            let (dx, dz) = (p.position[0][i] - centre, p.position[2][i] - centre);
-            let a = viscous_at(i) - acceleration(i, &nb, &density, &fluid, &inviscid);
-            torque += dz * a.x - dx * a.z;
-            angular_momentum += omega * (dx * dx + dz * dz);
-        }
+        let torque: f64 = (0..n)
+            .map(|i| {
+                let (dx, dz) = arm(i);
+                let a = viscous_at(i) - inviscid[i];
+                dz * a.x - dx * a.z
+            })
+            .sum();
         -torque / angular_momentum
     };
     let paper = StressDivergence { stress: stress.read() };
