@@ -8,7 +8,8 @@ use coil_kernels::counting_sort::{
     chunk_total, count_particle, gather, scan_by_levels, scan_chunk, scan_chunk_in_place, scan_chunk_offsets, scan_levels_len,
     scatter, sort_bucket, sum_chunk, Counters, ScanStep,
 };
-use coil_kernels::topology::{Periodic, Topology};
+use coil_kernels::fluid_cells::{holds_fluid_pass, near_fluid_pass, HoldsFluidArgs, NearFluidArgs};
+use coil_kernels::topology::{Open, Periodic, Topology};
 use coil_kernels::view::{Vec3View, View, ViewMut};
 use coil_kernels::Real;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -26,6 +27,12 @@ pub struct NeighborGrid {
     order: Vec<u32>,
     /// The chunk totals, then the levels of their scan (`counting_sort::scan_levels`).
     chunk_offsets: Vec<u32>,
+    /// Per cell: whether it holds fluid, then whether it lies near fluid (`fluid_cells`).
+    holds_fluid: Vec<u32>,
+    near_fluid: Vec<u32>,
+    /// Ids below this are fixed boundary particles at rest, whose cells each sort marks; `None`
+    /// marks every cell near fluid.
+    resting_boundary: Option<u32>,
 }
 
 /// How far below the support radius (relative) a periodic axis's cells may fall: a period
@@ -55,12 +62,31 @@ impl NeighborGrid {
             cell_start: vec![0; buckets + 1],
             order: vec![0; capacity],
             chunk_offsets: vec![0; scan_levels_len(buckets.div_ceil(SCAN_CHUNK))],
+            holds_fluid: vec![1; buckets - 1],
+            near_fluid: vec![1; buckets - 1],
+            resting_boundary: None,
         }
+    }
+
+    /// From the next sort on, marks the cells near fluid, for particles whose ids below
+    /// `boundary_count` are fixed boundary particles that stay at rest (not mirrored walls).
+    pub fn track_fluid(&mut self, boundary_count: u32) {
+        self.resting_boundary = Some(boundary_count);
+    }
+
+    /// Whether the sorts mark the cells near fluid (else every cell is marked).
+    pub fn tracks_fluid(&self) -> Option<u32> {
+        self.resting_boundary
     }
 
     /// Bytes of the grid's own arrays.
     pub fn bytes(&self) -> usize {
-        4 * (self.cell_key.len() + self.counters.len() + self.cell_start.len() + self.order.len())
+        4 * (self.cell_key.len()
+            + self.counters.len()
+            + self.cell_start.len()
+            + self.order.len()
+            + self.holds_fluid.len()
+            + self.near_fluid.len())
     }
 
     /// Sorts the particles by cell, dropping those outside the domain; returns how many left.
@@ -110,13 +136,45 @@ impl NeighborGrid {
 
         let live = self.cell_start[grid.cell_count() as usize] as usize;
         reorder(p, View::new(&self.order[..live]), live);
+        self.mark_cells_near_fluid(View::new(&p.id[..live]));
         n - live
+    }
+
+    /// The `fluid_cells` passes over the sorted particles' ids, when the grid tracks fluid.
+    fn mark_cells_near_fluid(&mut self, id: View<u32>) {
+        let Some(boundary_count) = self.resting_boundary else {
+            return;
+        };
+        let cells = self.holds_fluid.len();
+        let args = HoldsFluidArgs {
+            cell_start: View::new(&self.cell_start),
+            id,
+            boundary_count,
+            holds_fluid: ViewMut::new(&mut self.holds_fluid),
+        };
+        launch(cells, |c| holds_fluid_pass(c, &args));
+        let periodic = self.is_periodic();
+        let (grid, cell_start) = (self.grid, View::new(&self.cell_start));
+        let (holds_fluid, near_fluid) = (View::new(&self.holds_fluid), ViewMut::new(&mut self.near_fluid));
+        if periodic {
+            let args = NearFluidArgs { grid, topology: self.periodic, cell_start, holds_fluid, near_fluid };
+            launch(cells, |c| near_fluid_pass(c, &args));
+        } else {
+            let args = NearFluidArgs { grid, topology: Open, cell_start, holds_fluid, near_fluid };
+            launch(cells, |c| near_fluid_pass(c, &args));
+        }
     }
 
     /// The start of each cell's run, for a backend that sorted elsewhere to fill in.
     #[cfg(feature = "cuda")]
     pub(crate) fn cell_start_mut(&mut self) -> &mut [u32] {
         &mut self.cell_start
+    }
+
+    /// The near-fluid marks, for a backend that sorted elsewhere to fill in.
+    #[cfg(feature = "cuda")]
+    pub(crate) fn near_fluid_mut(&mut self) -> &mut [u32] {
+        &mut self.near_fluid
     }
 
     /// Whether any axis wraps.
@@ -126,7 +184,13 @@ impl NeighborGrid {
 
     /// The sorted grid for the particles' current order, in topology `topology`.
     pub fn neighborhood<'a, T: Topology>(&'a self, position: Vec3View<'a, f64>, topology: T) -> Neighborhood<'a, T> {
-        Neighborhood { grid: self.grid, cell_start: View::new(&self.cell_start), position, topology }
+        Neighborhood {
+            grid: self.grid,
+            cell_start: View::new(&self.cell_start),
+            position,
+            topology,
+            near_fluid: View::new(&self.near_fluid),
+        }
     }
 }
 

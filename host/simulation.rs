@@ -162,6 +162,9 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
                 .then(|| [0, 1, 2].map(|a| initial.boundary_mirror.iter().map(|m| m[a]).collect())),
             density_kernel: mat.density_kernel,
         };
+        if sim.wall_mirror.is_none() {
+            sim.grid.track_fluid(fluid.boundary_count);
+        }
         sim.sort_and_density();
         sim.diagnostics.max_speed = start_speed;
         sim

@@ -21,6 +21,7 @@ use coil_kernels::counting_sort::Counters;
 use coil_kernels::cross_viscosity::{Cross, Newtonian};
 use coil_kernels::density::DensityArgs;
 use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
+use coil_kernels::fluid_cells::{HoldsFluidArgs, NearFluidArgs};
 use coil_kernels::hourglass_control::{HourglassControlledStress, VelocityGradientArgs};
 use coil_kernels::leapfrog::LeapfrogArgs;
 use coil_kernels::mirrored_wall::MirroredWallArgs;
@@ -108,6 +109,9 @@ fn ptx_entry_parameters_match_the_host_argument_layouts() {
         ("scan_chunks".into(), vec![4, 4, view, size_of::<Counters>(), view]),
         ("scatter_particles".into(), vec![view, view, size_of::<Counters>(), view]),
         ("sort_buckets".into(), vec![4, view, view]),
+        ("holds_fluid".into(), vec![4, size_of::<HoldsFluidArgs>()]),
+        ("near_fluid".into(), vec![4, size_of::<NearFluidArgs<Open>>()]),
+        ("near_fluid_periodic".into(), vec![4, size_of::<NearFluidArgs<Periodic>>()]),
         ("set_count".into(), vec![view, view, 4]),
         ("grow_count".into(), vec![view, 4]),
         ("gather_u32".into(), vec![view; 4]),
@@ -498,7 +502,8 @@ fn to_host<T: Copy + Default>(gpu: &Gpu, a: &DeviceArray<T>, len: usize) -> Vec<
 /// Each stage of a step, launched alone on random particles, against the CPU: the cell key of
 /// each particle from the same `hash` function, its histogram, the exclusive scan of that (in
 /// chunks of 2 buckets, so the scan of the chunk totals takes two levels), the stable order by
-/// key, the reorder and the live count, which are what those stages are defined to give; then
+/// key, the reorder and the live count, and the cells holding and near fluid, which are what
+/// those stages are defined to give; then
 /// the density, stress and acceleration passes against the same functions run on the CPU. 4000 particles over a
 /// 8 x 6 x 5 grid of 0.1 m cells (about 17 to a cell, some cells nearly empty) and its margins,
 /// so that about a tenth fall outside and must sort last. The integer stages must agree
@@ -590,6 +595,45 @@ fn random_stages(engine: Engine, seed: u64) {
         assert!(to_host(&gpu, &sorted_x, live) == gathered, "{engine:?}, seed {seed}: reorder");
     }
 
+    // The cells holding and near fluid, with all but 6 particles as wall particles, so that
+    // some cells lie away from fluid (a cell near no fluid holds walls only; an empty one
+    // counts as near).
+    let walls = n as u32 - 6;
+    let holds: Vec<u32> =
+        (0..cells).map(|c| order[start[c] as usize..start[c + 1] as usize].iter().any(|&i| i >= walls) as u32).collect();
+    let coords = |c: usize| [c % 8, c / 8 % 6, c / 48].map(|k| k as i64);
+    let near: Vec<u32> = (0..cells)
+        .map(|c| {
+            let empty = start[c] == start[c + 1];
+            let around = (0..cells).any(|d| holds[d] == 1 && (0..3).all(|a| (coords(c)[a] - coords(d)[a]).abs() <= 1));
+            (empty || around) as u32
+        })
+        .collect();
+    assert!(near.contains(&0) && near.contains(&1), "seed {seed}: cells both near and away from fluid");
+    let sorted_id = on_device(&gpu, &order[..live]);
+    let holds_on_device = on_device(&gpu, &vec![0u32; cells]);
+    let near_on_device = on_device(&gpu, &vec![0u32; cells]);
+    let holds_args = HoldsFluidArgs {
+        cell_start: cell_start.view(buckets + 1),
+        id: sorted_id.view(live),
+        boundary_count: walls,
+        holds_fluid: holds_on_device.view_mut(cells),
+    };
+    let near_args = NearFluidArgs {
+        grid,
+        topology: Open,
+        cell_start: cell_start.view(buckets + 1),
+        holds_fluid: holds_on_device.view(cells),
+        near_fluid: near_on_device.view_mut(cells),
+    };
+    // SAFETY: holds_fluid(cells, args) and near_fluid(cells, args) over the grid's cells.
+    unsafe {
+        gpu.launch("holds_fluid", cells as u32, &[&ByValue(cells as u32), &ByValue(holds_args)]).expect("holds fluid");
+        gpu.launch("near_fluid", cells as u32, &[&ByValue(cells as u32), &ByValue(near_args)]).expect("near fluid");
+    }
+    assert!(to_host(&gpu, &holds_on_device, cells) == holds, "{engine:?}, seed {seed}: cells holding fluid");
+    assert!(to_host(&gpu, &near_on_device, cells) == near, "{engine:?}, seed {seed}: cells near fluid");
+
     // The float passes over the live particles, sorted, with the dam break's constants (h =
     // 0.08 m, within the 0.1 m cells, the Cross law) and random velocities up to 0.5 m/s; a
     // quarter of them (ids below n / 4) are wall particles, whose acceleration is zero.
@@ -604,12 +648,15 @@ fn random_stages(engine: Engine, seed: u64) {
     let mut density = vec![0f64; live];
     let mut stress: [Vec<f64>; 6] = std::array::from_fn(|_| vec![0f64; live]);
     let mut acceleration: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0f64; live]);
+    // The wall particles move here, so every cell counts as near fluid.
+    let everywhere = vec![1u32; cells];
     {
         let neighborhood = Neighborhood {
             grid,
             cell_start: View::new(&start),
             position: Vec3View::new(&sorted[0], &sorted[1], &sorted[2]),
             topology: Open,
+            near_fluid: View::new(&everywhere),
         };
         let density_args = DensityArgs { neighborhood, fluid, density: ViewMut::new(&mut density) };
         (0..live).for_each(|i| density_pass::<f64, Poly6, Open>(i, &density_args));
@@ -646,6 +693,7 @@ fn random_stages(engine: Engine, seed: u64) {
     let sorted_on_device = sorted.each_ref().map(|p| on_device(&gpu, p));
     let velocity_on_device = velocity.each_ref().map(|v| on_device(&gpu, v));
     let id_on_device = on_device(&gpu, id);
+    let everywhere_on_device = on_device(&gpu, &everywhere);
     let device_density = on_device(&gpu, &vec![0f64; live]);
     let device_stress: [DeviceArray<f64>; 6] = std::array::from_fn(|_| on_device(&gpu, &vec![0f64; live]));
     let device_acceleration: [DeviceArray<f64>; 3] = std::array::from_fn(|_| on_device(&gpu, &vec![0f64; live]));
@@ -654,6 +702,7 @@ fn random_stages(engine: Engine, seed: u64) {
         cell_start: cell_start.view(buckets + 1),
         position: vec3_view(&sorted_on_device, live),
         topology: Open,
+        near_fluid: everywhere_on_device.view(cells),
     };
     let [xx, yy, zz, xy, xz, yz] = &device_stress;
     let stress_view = SymTensorViewMut {

@@ -766,3 +766,64 @@ fn the_laplacians_brake_a_rigid_rotation_that_the_papers_operator_leaves_nearly_
         assert!(rate.abs() < 0.1 * muller.min(morris), "{name} spins the ball down at {rate} 1/s");
     }
 }
+
+/// Away from fluid the velocity gradient, Eq. (8), skips its neighbor loop: for a wall of
+/// particles at rest beside fluid in random motion, open and periodic, no particle it skips has
+/// fluid within h, most wall particles are skipped, and every particle's gradient is the full
+/// loop's to the bit.
+#[test]
+fn the_velocity_gradient_skips_only_wall_particles_with_no_fluid_within_h() {
+    use coil::neighbor_grid::NeighborGrid;
+    use coil::particles::{vec3_view, ModelFields, Particles};
+    use coil_kernels::cell_grid::Neighborhood;
+    use coil_kernels::velocity_gradient::velocity_gradient;
+    let h = 0.1;
+    let (min, max) = ([0.0; 3], [0.8, 0.5, 0.6]);
+    let (walls, fluid_count) = (1500u32, 100u32);
+    for periodic in [[false; 3], [true, false, true]] {
+        let mut grid = NeighborGrid::new(min, max, h, periodic, (walls + fluid_count) as usize);
+        grid.track_fluid(walls);
+        let mut p = Particles::<f64>::with_capacity((walls + fluid_count) as usize, ModelFields::default());
+        let mut state = 11u64;
+        // A wall over the whole floor, fluid over its end at x < 0.15 m: along x, 3 of its 8
+        // cells lie near fluid, 4 where x wraps.
+        for id in 0..walls {
+            p.push(id, [0.8 * uniform(&mut state), 0.15 * uniform(&mut state), 0.6 * uniform(&mut state)], [0.0; 3]);
+        }
+        for id in walls..walls + fluid_count {
+            let x = [0.15 * uniform(&mut state), 0.05 + 0.45 * uniform(&mut state), 0.6 * uniform(&mut state)];
+            p.push(id, x, [0, 1, 2].map(|_| uniform(&mut state) - 0.5));
+        }
+        assert_eq!(grid.sort(&mut p), 0);
+        let n = p.len();
+        p.density[..n].iter_mut().for_each(|rho| *rho = 1000.0 + uniform(&mut state));
+        let fluid = Fluid { boundary_count: walls, kernels: SmoothingKernels::new(h), ..fluid::<f64>() };
+        let tracked = grid.neighborhood(p.position_view(), grid.periodic);
+        let everywhere = vec![1u32; grid.grid.cell_count() as usize];
+        let full = Neighborhood { near_fluid: View::new(&everywhere), ..tracked };
+        let (velocity, density) = (vec3_view(&p.velocity, n), View::new(&p.density[..n]));
+        let image = |d: f64, l: f64| if l > 0.0 { d - l * (d / l).round() } else { d };
+        let mut skipped = 0;
+        for i in 0..n {
+            if !tracked.near_fluid(i) {
+                skipped += 1;
+                assert!(p.id[i] < walls, "fluid particle {} skipped", p.id[i]);
+                for j in (0..n).filter(|&j| p.id[j] >= walls) {
+                    let d = [0, 1, 2].map(|a| image(p.position[a][i] - p.position[a][j], grid.periodic.period[a]));
+                    assert!(
+                        d[0] * d[0] + d[1] * d[1] + d[2] * d[2] >= h * h,
+                        "wall particle {} skipped with fluid within h",
+                        p.id[i]
+                    );
+                }
+            }
+            let bits = |m: Mat3<f64>| m.m.map(|row| row.map(f64::to_bits));
+            let (skipping, looping) = (
+                velocity_gradient(i, &tracked, &velocity, &density, &fluid),
+                velocity_gradient(i, &full, &velocity, &density, &fluid),
+            );
+            assert_eq!(bits(skipping), bits(looping), "particle {}", p.id[i]);
+        }
+        assert!(skipped > walls as usize / 3, "{periodic:?}: {skipped} of {walls} wall particles skipped");
+    }
+}

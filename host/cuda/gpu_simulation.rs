@@ -21,6 +21,7 @@ use coil_kernels::counting_sort::scan_levels_len;
 use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::density::{DensityArgs, DensityKernel as _, Poly6, Spiky};
 use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
+use coil_kernels::fluid_cells::{HoldsFluidArgs, NearFluidArgs};
 use coil_kernels::hourglass_control::VelocityGradientArgs;
 use coil_kernels::leapfrog::LeapfrogArgs;
 use coil_kernels::mirrored_wall::MirroredWallArgs;
@@ -85,6 +86,9 @@ struct DeviceState<R> {
     cell_start: DeviceArray<u32>,
     order: DeviceArray<u32>,
     chunk_offsets: DeviceArray<u32>,
+    /// Per cell: whether it holds fluid, then whether it lies near fluid (`fluid_cells`).
+    holds_fluid: DeviceArray<u32>,
+    near_fluid: DeviceArray<u32>,
     /// The live particle count (one entry).
     count: DeviceArray<u32>,
     /// Inlet layers of this step, before they are appended.
@@ -137,6 +141,8 @@ impl<R: Real> DeviceState<R> {
             cell_start: DeviceArray::zeros(gpu, buckets + 1, "cell starts")?,
             order: DeviceArray::zeros(gpu, capacity, "sort order")?,
             chunk_offsets: DeviceArray::zeros(gpu, scan_levels_len(buckets_chunks(buckets)), "scan chunks")?,
+            holds_fluid: DeviceArray::zeros(gpu, buckets - 1, "cells holding fluid")?,
+            near_fluid: DeviceArray::zeros(gpu, buckets - 1, "cells near fluid")?,
             count: DeviceArray::zeros(gpu, 1, "particle count")?,
             staged_position: vec3_zeros(gpu, staged, "inlet layers")?,
             staged_velocity: vec3_zeros(gpu, staged, "inlet layers")?,
@@ -166,6 +172,8 @@ impl<R: Real> DeviceState<R> {
             + self.cell_start.bytes()
             + self.order.bytes()
             + self.chunk_offsets.bytes()
+            + self.holds_fluid.bytes()
+            + self.near_fluid.bytes()
             + self.count.bytes()
             + v3(&self.staged_position)
             + r3(&self.staged_velocity)
@@ -308,6 +316,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         d.id.upload(gpu, &p.id[..n])?;
         d.density.upload(gpu, &p.density[..n])?;
         d.cell_start.upload(gpu, self.host.grid.cell_start_mut())?;
+        d.near_fluid.upload(gpu, self.host.grid.near_fluid_mut())?;
         d.count.upload(gpu, &[n as u32])?;
         gpu.synchronize()
     }
@@ -327,8 +336,8 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         }
         d.id.download(gpu, &mut p.id[..n])?;
         d.density.download(gpu, &mut p.density[..n])?;
-        let cells = self.host.grid.cell_start_mut();
-        d.cell_start.download(gpu, cells)?;
+        d.cell_start.download(gpu, self.host.grid.cell_start_mut())?;
+        d.near_fluid.download(gpu, self.host.grid.near_fluid_mut())?;
         Ok(())
     }
 
@@ -350,6 +359,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
 
     /// Lines 5-19, after the sort, with the neighbor loops and the wrap of topology `T`.
     fn after_sort<T: Topology>(&mut self, topology: T, dt: f64) -> Result<(), CudaError> {
+        self.mark_cells_near_fluid(topology)?;
         self.density(topology)?;
         self.mirrored_walls(topology)?;
         let n = self.bound;
@@ -420,6 +430,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
             cell_start: self.device.cell_start.view(self.device.cell_start.len()),
             position: vec3_view(&self.device.position, self.bound),
             topology,
+            near_fluid: self.device.near_fluid.view(self.device.near_fluid.len()),
         }
     }
 
@@ -527,6 +538,37 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
             std::mem::swap(&mut d.id, &mut d.scratch_u32);
         }
         Ok(())
+    }
+
+    /// The `fluid_cells` passes over the sorted particles, when the run tracks fluid (else the
+    /// host's marks, every cell near fluid, stay as uploaded).
+    fn mark_cells_near_fluid<T: Topology>(&mut self, topology: T) -> Result<(), CudaError> {
+        let Some(boundary_count) = self.host.grid.tracks_fluid() else {
+            return Ok(());
+        };
+        let grid = self.host.grid.grid;
+        let cells = grid.cell_count();
+        let d = &self.device;
+        let cell_start = d.cell_start.view(d.cell_start.len());
+        let holds = HoldsFluidArgs {
+            cell_start,
+            id: d.id.view(self.bound),
+            boundary_count,
+            holds_fluid: d.holds_fluid.view_mut(cells as usize),
+        };
+        let near = NearFluidArgs {
+            grid,
+            topology,
+            cell_start,
+            holds_fluid: d.holds_fluid.view(cells as usize),
+            near_fluid: d.near_fluid.view_mut(cells as usize),
+        };
+        // SAFETY: holds_fluid(cells, args) and near_fluid_<T>(cells, args) over the grid's cells.
+        unsafe {
+            self.gpu.launch("holds_fluid", cells, &[&ByValue(cells), &ByValue(holds)])?;
+            let near_fluid = if T::PERIODIC { "near_fluid_periodic" } else { "near_fluid" };
+            self.gpu.launch(near_fluid, cells, &[&ByValue(cells), &ByValue(near)])
+        }
     }
 
     /// Lines 5-8: density (pressure is evaluated from it where it is read).

@@ -88,6 +88,9 @@ pub struct Neighborhood<'a, T = Open> {
     /// motion far from the origin; differences are taken in f64 and then rounded to `R`.
     pub position: Vec3View<'a, f64>,
     pub topology: T,
+    /// `cell_count()` entries: non-zero where fluid may lie within h of the cell's particles
+    /// (`fluid_cells`).
+    pub near_fluid: View<'a, u32>,
 }
 
 impl<T: Topology> Neighborhood<'_, T> {
@@ -97,6 +100,17 @@ impl<T: Topology> Neighborhood<'_, T> {
     #[inline(always)]
     pub fn for_each_neighbor<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, i: usize, h2: R, f: F) {
         self.for_each_particle_near(self.position.at(i), h2, f);
+    }
+
+    /// Whether fluid may lie within h of particle `i`; false where every particle within h is a
+    /// fixed boundary particle (`fluid_cells`), or where `i` has left the domain box and the
+    /// neighbor loop finds nothing.
+    #[inline(always)]
+    pub fn near_fluid(&self, i: usize) -> bool {
+        match self.grid.cell_coords(self.position.at(i)) {
+            Some(c) => self.near_fluid.at(self.grid.linear_index(c) as usize) != 0,
+            None => false,
+        }
     }
 
     /// Calls `f(j, x - x_j, |x - x_j|^2)` for every particle j with |x - x_j| < h around a point

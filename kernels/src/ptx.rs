@@ -20,6 +20,7 @@ use crate::counting_sort::{
 use crate::cross_viscosity::{Cross, Newtonian};
 use crate::density::{density_pass, DensityArgs, Poly6, Spiky};
 use crate::diagnostics::{diagnostics_pass, DiagnosticsArgs, StateFigures};
+use crate::fluid_cells::{holds_fluid_pass, near_fluid_pass, HoldsFluidArgs, NearFluidArgs};
 use crate::hourglass_control::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
 use crate::leapfrog::{leapfrog_pass, LeapfrogArgs};
 use crate::mirrored_wall::{mirrored_wall_pass, MirroredWallArgs};
@@ -313,6 +314,24 @@ entry!(sort_buckets(c; buckets: u32, bucket_start: View<'static, u32>, order: Vi
     }
 });
 
+entry!(holds_fluid(c; cells: u32, args: HoldsFluidArgs<'static>) {
+    if c < cells as usize {
+        holds_fluid_pass(c, &args);
+    }
+});
+
+entry!(near_fluid(c; cells: u32, args: NearFluidArgs<'static, Open>) {
+    if c < cells as usize {
+        near_fluid_pass(c, &args);
+    }
+});
+
+entry!(near_fluid_periodic(c; cells: u32, args: NearFluidArgs<'static, Periodic>) {
+    if c < cells as usize {
+        near_fluid_pass(c, &args);
+    }
+});
+
 macro_rules! gather_kernel {
     ($name:ident, $t:ty) => {
         entry!($name(k; count: View<'static, u32>, order: View<'static, u32>, unsorted: View<'static, $t>, sorted: ViewMut<'static, $t>) {
@@ -451,6 +470,9 @@ pub const ENTRIES: &[(&str, Emulated)] = {
         scan_chunks,
         scatter_particles,
         sort_buckets,
+        holds_fluid,
+        near_fluid,
+        near_fluid_periodic,
         gather_u32,
         gather_f32,
         gather_f64,

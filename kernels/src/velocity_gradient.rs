@@ -9,7 +9,8 @@ use crate::vec3::{Mat3, SymTensor, Vec3};
 use crate::view::{SymTensorViewMut, Vec3View, View};
 
 /// Velocity gradient, Eq. (8): grad v_i = sum_j (m_j / rho_j) (v_j - v_i) ⊗ grad_i W(x_ij)
-/// (1/s), with `m[a][b] = d v_a / d x_b`.
+/// (1/s), with `m[a][b] = d v_a / d x_b`. Zero, without the neighbor loop, away from fluid,
+/// where every term is zero.
 #[inline(always)]
 pub fn velocity_gradient<R: Real, T: Topology>(
     i: usize,
@@ -18,6 +19,9 @@ pub fn velocity_gradient<R: Real, T: Topology>(
     density: &View<R>,
     fluid: &Fluid<R>,
 ) -> Mat3<R> {
+    if !neighborhood.near_fluid(i) {
+        return Mat3::zero();
+    }
     let [vx, vy, vz] = velocity.at(i);
     let vi = Vec3::new(vx, vy, vz);
     let mut grad = Mat3::zero();
