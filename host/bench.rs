@@ -334,7 +334,12 @@ pub fn compulsory_bytes(real: usize, fields: ModelFields, particles: f64, cells:
     let leapfrog = 2.0 * (p + 6.0 * r);
     // Counters cleared, counted and scanned; cell starts written and read.
     let grid = 4.0 * 4.0;
-    particles * (hash + histogram_and_scatter + reorder + density + gradient_pass + acceleration + leapfrog) + cells * grid
+    // The cells near fluid: ids read; a byte a cell for holding fluid written and read, and
+    // one for lying near it written.
+    let (fluid_cells_per_particle, fluid_cells_per_cell) = (4.0, 3.0);
+    particles
+        * (hash + histogram_and_scatter + reorder + fluid_cells_per_particle + density + gradient_pass + acceleration + leapfrog)
+        + cells * (grid + fluid_cells_per_cell)
 }
 
 /// The CPU's model name and the worker threads, for the report.

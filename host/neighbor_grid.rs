@@ -28,8 +28,8 @@ pub struct NeighborGrid {
     /// The chunk totals, then the levels of their scan (`counting_sort::scan_levels`).
     chunk_offsets: Vec<u32>,
     /// Per cell: whether it holds fluid, then whether it lies near fluid (`fluid_cells`).
-    holds_fluid: Vec<u32>,
-    near_fluid: Vec<u32>,
+    holds_fluid: Vec<u8>,
+    near_fluid: Vec<u8>,
     /// Ids below this are fixed boundary particles at rest, whose cells each sort marks; `None`
     /// marks every cell near fluid.
     resting_boundary: Option<u32>,
@@ -81,12 +81,9 @@ impl NeighborGrid {
 
     /// Bytes of the grid's own arrays.
     pub fn bytes(&self) -> usize {
-        4 * (self.cell_key.len()
-            + self.counters.len()
-            + self.cell_start.len()
-            + self.order.len()
+        4 * (self.cell_key.len() + self.counters.len() + self.cell_start.len() + self.order.len())
             + self.holds_fluid.len()
-            + self.near_fluid.len())
+            + self.near_fluid.len()
     }
 
     /// Sorts the particles by cell, dropping those outside the domain; returns how many left.
@@ -173,7 +170,7 @@ impl NeighborGrid {
 
     /// The near-fluid marks, for a backend that sorted elsewhere to fill in.
     #[cfg(feature = "cuda")]
-    pub(crate) fn near_fluid_mut(&mut self) -> &mut [u32] {
+    pub(crate) fn near_fluid_mut(&mut self) -> &mut [u8] {
         &mut self.near_fluid
     }
 

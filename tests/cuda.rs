@@ -599,20 +599,20 @@ fn random_stages(engine: Engine, seed: u64) {
     // some cells lie away from fluid (a cell near no fluid holds walls only; an empty one
     // counts as near).
     let walls = n as u32 - 6;
-    let holds: Vec<u32> =
-        (0..cells).map(|c| order[start[c] as usize..start[c + 1] as usize].iter().any(|&i| i >= walls) as u32).collect();
+    let holds: Vec<u8> =
+        (0..cells).map(|c| order[start[c] as usize..start[c + 1] as usize].iter().any(|&i| i >= walls) as u8).collect();
     let coords = |c: usize| [c % 8, c / 8 % 6, c / 48].map(|k| k as i64);
-    let near: Vec<u32> = (0..cells)
+    let near: Vec<u8> = (0..cells)
         .map(|c| {
             let empty = start[c] == start[c + 1];
             let around = (0..cells).any(|d| holds[d] == 1 && (0..3).all(|a| (coords(c)[a] - coords(d)[a]).abs() <= 1));
-            (empty || around) as u32
+            (empty || around) as u8
         })
         .collect();
     assert!(near.contains(&0) && near.contains(&1), "seed {seed}: cells both near and away from fluid");
     let sorted_id = on_device(&gpu, &order[..live]);
-    let holds_on_device = on_device(&gpu, &vec![0u32; cells]);
-    let near_on_device = on_device(&gpu, &vec![0u32; cells]);
+    let holds_on_device = on_device(&gpu, &vec![0u8; cells]);
+    let near_on_device = on_device(&gpu, &vec![0u8; cells]);
     let holds_args = HoldsFluidArgs {
         cell_start: cell_start.view(buckets + 1),
         id: sorted_id.view(live),
@@ -649,7 +649,7 @@ fn random_stages(engine: Engine, seed: u64) {
     let mut stress: [Vec<f64>; 6] = std::array::from_fn(|_| vec![0f64; live]);
     let mut acceleration: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0f64; live]);
     // The wall particles move here, so every cell counts as near fluid.
-    let everywhere = vec![1u32; cells];
+    let everywhere = vec![1u8; cells];
     {
         let neighborhood = Neighborhood {
             grid,

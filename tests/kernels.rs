@@ -799,7 +799,7 @@ fn the_velocity_gradient_skips_only_wall_particles_with_no_fluid_within_h() {
         p.density[..n].iter_mut().for_each(|rho| *rho = 1000.0 + uniform(&mut state));
         let fluid = Fluid { boundary_count: walls, kernels: SmoothingKernels::new(h), ..fluid::<f64>() };
         let tracked = grid.neighborhood(p.position_view(), grid.periodic);
-        let everywhere = vec![1u32; grid.grid.cell_count() as usize];
+        let everywhere = vec![1u8; grid.grid.cell_count() as usize];
         let full = Neighborhood { near_fluid: View::new(&everywhere), ..tracked };
         let (velocity, density) = (vec3_view(&p.velocity, n), View::new(&p.density[..n]));
         let image = |d: f64, l: f64| if l > 0.0 { d - l * (d / l).round() } else { d };

@@ -87,8 +87,8 @@ struct DeviceState<R> {
     order: DeviceArray<u32>,
     chunk_offsets: DeviceArray<u32>,
     /// Per cell: whether it holds fluid, then whether it lies near fluid (`fluid_cells`).
-    holds_fluid: DeviceArray<u32>,
-    near_fluid: DeviceArray<u32>,
+    holds_fluid: DeviceArray<u8>,
+    near_fluid: DeviceArray<u8>,
     /// The live particle count (one entry).
     count: DeviceArray<u32>,
     /// Inlet layers of this step, before they are appended.

@@ -90,7 +90,7 @@ pub struct Neighborhood<'a, T = Open> {
     pub topology: T,
     /// `cell_count()` entries: non-zero where fluid may lie within h of the cell's particles
     /// (`fluid_cells`).
-    pub near_fluid: View<'a, u32>,
+    pub near_fluid: View<'a, u8>,
 }
 
 impl<T: Topology> Neighborhood<'_, T> {

@@ -21,7 +21,7 @@ pub struct HoldsFluidArgs<'a> {
     /// Ids below this are fixed boundary particles (`Fluid::boundary_count`).
     pub boundary_count: u32,
     /// Per cell: 1 where it holds a fluid particle, else 0.
-    pub holds_fluid: ViewMut<'a, u32>,
+    pub holds_fluid: ViewMut<'a, u8>,
 }
 
 /// The holds-fluid pass for cell `c`.
@@ -47,12 +47,12 @@ pub struct NearFluidArgs<'a, T> {
     pub topology: T,
     pub cell_start: View<'a, u32>,
     /// The holds-fluid pass's marks.
-    pub holds_fluid: View<'a, u32>,
+    pub holds_fluid: View<'a, u8>,
     /// Per cell: 0 where it holds only fixed boundary particles and none of the (up to 26)
     /// cells around it holds fluid, else 1. An empty cell is marked 1: no boundary particle is
     /// in it, and a fluid particle may enter it before the next sort (frames read the grid
     /// after the step's move).
-    pub near_fluid: ViewMut<'a, u32>,
+    pub near_fluid: ViewMut<'a, u8>,
 }
 
 /// The near-fluid pass for cell `c`: the cells around it are those the neighbor loop visits,
@@ -61,7 +61,7 @@ pub struct NearFluidArgs<'a, T> {
 pub fn near_fluid_pass<T: Topology>(c: usize, a: &NearFluidArgs<T>) {
     let near = a.holds_fluid.at(c) != 0 || a.cell_start.at(c) == a.cell_start.at(c + 1) || holds_fluid_around(c, a);
     // SAFETY: invocation c owns entry c.
-    unsafe { a.near_fluid.write(c, near as u32) };
+    unsafe { a.near_fluid.write(c, near as u8) };
 }
 
 /// Whether a cell around cell `c` holds fluid.
