@@ -74,7 +74,8 @@ impl NeighborGrid {
         self.resting_boundary = Some(boundary_count);
     }
 
-    /// Whether the sorts mark the cells near fluid (else every cell is marked).
+    /// The boundary count the sorts mark the cells near fluid by; `None` where every cell
+    /// counts as near fluid.
     pub fn tracks_fluid(&self) -> Option<u32> {
         self.resting_boundary
     }

@@ -769,7 +769,7 @@ fn the_laplacians_brake_a_rigid_rotation_that_the_papers_operator_leaves_nearly_
 
 /// Away from fluid the velocity gradient, Eq. (8), skips its neighbor loop: for a wall of
 /// particles at rest beside fluid in random motion, open and periodic, no particle it skips has
-/// fluid within h, most wall particles are skipped, and every particle's gradient is the full
+/// fluid within h, over a third of the wall particles are, and every particle's gradient is the full
 /// loop's to the bit.
 #[test]
 fn the_velocity_gradient_skips_only_wall_particles_with_no_fluid_within_h() {
