@@ -6,6 +6,7 @@ use crate::frame::Frame;
 use crate::model::{with_precision_and_model, Model, WithModel};
 use crate::output::vtu::{encode, Field, Series};
 use crate::output::write_atomically;
+use crate::parallel::on_worker;
 use crate::preview::{own_range, render, speeds, Coloring, View};
 use crate::run_log::{resolved, Resumed, RunLog};
 use crate::scene::{FrameFormat, Precision, Scene, SceneError};
@@ -405,7 +406,8 @@ impl WithModel for Drive<'_> {
             }
         };
         match self.device {
-            None => drive(sim, self.scene, self.initial, self.options, tally),
+            // The whole loop on a worker: a step then hands no job to the pool from outside.
+            None => on_worker(|| drive(sim, self.scene, self.initial, self.options, tally)),
             #[cfg(feature = "cuda")]
             Some(gpu) => {
                 let sim = crate::cuda::GpuSimulation::new(sim, gpu).map_err(|e| match e {

@@ -4,7 +4,7 @@
 use crate::inlet::Inlet;
 use crate::model::{CpuPasses, Model, ParticleState};
 use crate::neighbor_grid::NeighborGrid;
-use crate::parallel::launch;
+use crate::parallel::{launch, on_worker};
 use crate::particles::{mat3_view_mut, stress_view_mut, vec3_view, vec3_view_mut, view_mut, Particles};
 use crate::scene::{DensityKernel, Scene, Walls};
 use crate::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, InitialParticles};
@@ -220,6 +220,10 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
 
     /// One step of Algorithm 1 with a given dt (s).
     pub fn step_with(&mut self, dt: f64, limit: Limit) -> Result<(), Instability> {
+        on_worker(|| self.step_on_worker(dt, limit))
+    }
+
+    fn step_on_worker(&mut self, dt: f64, limit: Limit) -> Result<(), Instability> {
         // Line 1: inject.
         let room = self.fluid_capacity - self.fluid_count;
         let added = inject(&mut self.inlets, self.time, dt, room, &mut self.next_id, &mut self.particles);
