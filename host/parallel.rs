@@ -19,3 +19,14 @@ pub fn on_worker<T: Send>(body: impl FnOnce() -> T + Send) -> T {
         rayon::scope(|_| body())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::on_worker;
+
+    #[test]
+    fn on_worker_runs_a_body_from_outside_the_pool_on_one_of_its_threads() {
+        assert_eq!(rayon::current_thread_index(), None, "the test harness's thread is not a worker");
+        assert!(on_worker(rayon::current_thread_index).is_some());
+    }
+}

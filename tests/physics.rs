@@ -190,28 +190,28 @@ fn neighbor_search_equals_brute_force() {
 }
 
 #[test]
-fn results_do_not_depend_on_the_thread_count() {
+fn results_do_not_depend_on_the_thread_count_or_the_calling_thread() {
     let text = common::box_scene(0.02, [0.3, 0.3, 0.2], [0.12, 0.2, 0.2], "")
         .replace("gravity_m_s2 = [0.0, 0.0, 0.0]", "gravity_m_s2 = [0.0, -9.8, 0.0]");
     let cross = Cross { nu0: 0.05, nu_inf: 0.005, k: 1.0, n: 1.0 };
-    let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
-        pool.install(|| {
-            let mut sim = simulation(&text, StressModel(cross));
-            for _ in 0..60 {
-                sim.step().expect("stable");
-            }
-            let p = &sim.particles;
-            let n = p.len();
-            (p.id[..n].to_vec(), [0, 1, 2].map(|a| p.position[a][..n].to_vec()), [0, 1, 2].map(|a| p.velocity[a][..n].to_vec()))
-        })
+    let steps = || {
+        let mut sim = simulation(&text, StressModel(cross));
+        for _ in 0..60 {
+            sim.step().expect("stable");
+        }
+        let p = &sim.particles;
+        let n = p.len();
+        (p.id[..n].to_vec(), [0, 1, 2].map(|a| p.position[a][..n].to_vec()), [0, 1, 2].map(|a| p.velocity[a][..n].to_vec()))
     };
-    let one = run(1);
-    let two = run(2);
-    assert_eq!(one.0, two.0, "same order");
-    for a in 0..3 {
-        assert!(one.1[a].iter().zip(&two.1[a]).all(|(x, y)| x.to_bits() == y.to_bits()), "positions differ");
-        assert!(one.2[a].iter().zip(&two.2[a]).all(|(x, y)| x.to_bits() == y.to_bits()), "velocities differ");
+    let on = |threads: usize| rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool").install(steps);
+    let one = on(1);
+    // From this test's own thread each step hands itself to the global pool (`on_worker`).
+    for (other, what) in [(on(2), "two threads"), (steps(), "the global pool")] {
+        assert_eq!(one.0, other.0, "same order with {what}");
+        for a in 0..3 {
+            assert!(one.1[a].iter().zip(&other.1[a]).all(|(x, y)| x.to_bits() == y.to_bits()), "positions differ with {what}");
+            assert!(one.2[a].iter().zip(&other.2[a]).all(|(x, y)| x.to_bits() == y.to_bits()), "velocities differ with {what}");
+        }
     }
 }
 
