@@ -243,6 +243,21 @@ fn nozzle_tube_contains_its_bore_upstream_of_the_exit() {
 /// outside h across the diagonals, the open loop finds exactly what a search of every particle
 /// finds, in cell order.
 #[test]
+fn a_cell_index_maps_back_to_its_coordinates() {
+    use coil_kernels::cell_grid::CellGrid;
+    // Uneven dimensions, so that a swapped axis or divisor maps some index elsewhere; and grids
+    // one cell thick, where the division by a dimension of 1 must not wrap.
+    for dims in [[7, 3, 5], [1, 4, 2], [5, 1, 1], [1, 1, 1]] {
+        let grid = CellGrid { origin: [0.0; 3], inverse_cell_size: [1.0; 3], dims };
+        for c in 0..grid.cell_count() {
+            let cell = grid.cell_of_index(c);
+            assert!((0..3).all(|a| cell[a] < dims[a]), "{dims:?}: {c} -> {cell:?}");
+            assert_eq!(grid.linear_index(cell), c, "{dims:?}: {c} -> {cell:?}");
+        }
+    }
+}
+
+#[test]
 fn the_open_neighbor_loop_finds_exactly_the_particles_within_h_in_cell_order() {
     use coil::neighbor_grid::NeighborGrid;
     use coil::particles::{ModelFields, Particles};

@@ -48,6 +48,16 @@ impl CellGrid {
     pub fn linear_index(&self, c: [u32; 3]) -> u32 {
         c[0] + self.dims[0] * (c[1] + self.dims[1] * c[2])
     }
+
+    /// Integer cell coordinates of linear index `c`: the inverse of [`Self::linear_index`].
+    #[inline(always)]
+    pub fn cell_of_index(&self, c: u32) -> [u32; 3] {
+        // Every dimension is at least 1; checked division keeps the divide-by-zero trap out of
+        // the device code.
+        let row = c.checked_div(self.dims[0]).unwrap_or(0);
+        let layer = row.checked_div(self.dims[1]).unwrap_or(0);
+        [c - row * self.dims[0], row - layer * self.dims[1], layer]
+    }
 }
 
 /// Cell key of particle `i`: its linear cell index, or `cell_count()` when it has left the

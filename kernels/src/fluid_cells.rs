@@ -67,13 +67,7 @@ pub fn near_fluid_pass<T: Topology>(c: usize, a: &NearFluidArgs<T>) {
 /// Whether a cell around cell `c` holds fluid.
 #[inline(always)]
 fn holds_fluid_around<T: Topology>(c: usize, a: &NearFluidArgs<T>) -> bool {
-    let dims = a.grid.dims;
-    let c = c as u32;
-    // Every dimension is at least 1; checked division keeps the divide-by-zero trap out of
-    // the device code.
-    let row = c.checked_div(dims[0]).unwrap_or(0);
-    let layer = row.checked_div(dims[1]).unwrap_or(0);
-    let cell = [c - row * dims[0], row - layer * dims[1], layer];
+    let cell = a.grid.cell_of_index(c as u32);
     let wrap = Periodic { origin: a.grid.origin, period: a.topology.periods() };
     for dz in -1..=1 {
         let Some(z) = wrap.neighbor_cell(&a.grid, 2, cell[2], dz) else { continue };
