@@ -27,7 +27,8 @@ pub struct NeighborGrid {
     order: Vec<u32>,
     /// The chunk totals, then the levels of their scan (`counting_sort::scan_levels`).
     chunk_offsets: Vec<u32>,
-    /// Per cell: whether it holds fluid, then whether it lies near fluid (`fluid_cells`).
+    /// Per cell: whether it holds fluid (allocated by `track_fluid`), then whether it lies near
+    /// fluid (`fluid_cells`).
     holds_fluid: Vec<u8>,
     near_fluid: Vec<u8>,
     /// Ids below this are fixed boundary particles at rest, whose cells each sort marks; `None`
@@ -62,7 +63,7 @@ impl NeighborGrid {
             cell_start: vec![0; buckets + 1],
             order: vec![0; capacity],
             chunk_offsets: vec![0; scan_levels_len(buckets.div_ceil(SCAN_CHUNK))],
-            holds_fluid: vec![1; buckets - 1],
+            holds_fluid: Vec::new(),
             near_fluid: vec![1; buckets - 1],
             resting_boundary: None,
         }
@@ -72,6 +73,7 @@ impl NeighborGrid {
     /// `boundary_count` are fixed boundary particles that stay at rest (not mirrored walls).
     pub fn track_fluid(&mut self, boundary_count: u32) {
         self.resting_boundary = Some(boundary_count);
+        self.holds_fluid = vec![0; self.near_fluid.len()];
     }
 
     /// The boundary count the sorts mark the cells near fluid by; `None` where every cell

@@ -86,8 +86,9 @@ struct DeviceState<R> {
     cell_start: DeviceArray<u32>,
     order: DeviceArray<u32>,
     chunk_offsets: DeviceArray<u32>,
-    /// Per cell: whether it holds fluid, then whether it lies near fluid (`fluid_cells`).
-    holds_fluid: DeviceArray<u8>,
+    /// Per cell: whether it holds fluid (where the run tracks fluid), then whether it lies near
+    /// fluid (`fluid_cells`).
+    holds_fluid: Option<DeviceArray<u8>>,
     near_fluid: DeviceArray<u8>,
     /// The live particle count (one entry).
     count: DeviceArray<u32>,
@@ -102,7 +103,14 @@ struct DeviceState<R> {
 }
 
 impl<R: Real> DeviceState<R> {
-    fn new(gpu: &Gpu, capacity: usize, buckets: usize, staged: usize, fields: ModelFields) -> Result<Self, CudaError> {
+    fn new(
+        gpu: &Gpu,
+        capacity: usize,
+        buckets: usize,
+        staged: usize,
+        fields: ModelFields,
+        tracks_fluid: bool,
+    ) -> Result<Self, CudaError> {
         let stress = if fields.stress {
             Some([
                 DeviceArray::zeros(gpu, capacity, "stress")?,
@@ -141,7 +149,7 @@ impl<R: Real> DeviceState<R> {
             cell_start: DeviceArray::zeros(gpu, buckets + 1, "cell starts")?,
             order: DeviceArray::zeros(gpu, capacity, "sort order")?,
             chunk_offsets: DeviceArray::zeros(gpu, scan_levels_len(buckets_chunks(buckets)), "scan chunks")?,
-            holds_fluid: DeviceArray::zeros(gpu, buckets - 1, "cells holding fluid")?,
+            holds_fluid: if tracks_fluid { Some(DeviceArray::zeros(gpu, buckets - 1, "cells holding fluid")?) } else { None },
             near_fluid: DeviceArray::zeros(gpu, buckets - 1, "cells near fluid")?,
             count: DeviceArray::zeros(gpu, 1, "particle count")?,
             staged_position: vec3_zeros(gpu, staged, "inlet layers")?,
@@ -172,7 +180,7 @@ impl<R: Real> DeviceState<R> {
             + self.cell_start.bytes()
             + self.order.bytes()
             + self.chunk_offsets.bytes()
-            + self.holds_fluid.bytes()
+            + self.holds_fluid.as_ref().map_or(0, DeviceArray::bytes)
             + self.near_fluid.bytes()
             + self.count.bytes()
             + v3(&self.staged_position)
@@ -262,7 +270,8 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         let buckets = host.grid.grid.cell_count() as usize + 1;
         // Four layers of every inlet per step is far above what dt at the Eq. (10) bound brings.
         let staged_capacity = 4 * host.inlets().iter().map(|i| i.layer_size()).sum::<usize>();
-        let mut device = DeviceState::new(&gpu, capacity, buckets, staged_capacity, M::FIELDS)?;
+        let tracks_fluid = host.grid.tracks_fluid().is_some();
+        let mut device = DeviceState::new(&gpu, capacity, buckets, staged_capacity, M::FIELDS, tracks_fluid)?;
         if let Some(mirror) = &host.wall_mirror {
             let mut on_device = vec3_zeros(&gpu, mirror[0].len(), "wall mirror images")?;
             for a in 0..3 {
@@ -543,24 +552,24 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
     /// The `fluid_cells` passes over the sorted particles, when the run tracks fluid (else the
     /// host's marks, every cell near fluid, stay as uploaded).
     fn mark_cells_near_fluid<T: Topology>(&mut self, topology: T) -> Result<(), CudaError> {
-        let Some(boundary_count) = self.host.grid.tracks_fluid() else {
+        let d = &self.device;
+        let (Some(boundary_count), Some(holds_fluid)) = (self.host.grid.tracks_fluid(), &d.holds_fluid) else {
             return Ok(());
         };
         let grid = self.host.grid.grid;
         let cells = grid.cell_count();
-        let d = &self.device;
         let cell_start = d.cell_start.view(d.cell_start.len());
         let holds = HoldsFluidArgs {
             cell_start,
             id: d.id.view(self.bound),
             boundary_count,
-            holds_fluid: d.holds_fluid.view_mut(cells as usize),
+            holds_fluid: holds_fluid.view_mut(cells as usize),
         };
         let near = NearFluidArgs {
             grid,
             topology,
             cell_start,
-            holds_fluid: d.holds_fluid.view(cells as usize),
+            holds_fluid: holds_fluid.view(cells as usize),
             near_fluid: d.near_fluid.view_mut(cells as usize),
         };
         // SAFETY: holds_fluid(cells, args) and near_fluid_<T>(cells, args) over the grid's cells.
