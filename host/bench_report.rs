@@ -85,10 +85,12 @@ pub fn markdown(report: &BenchReport, options: &BenchOptions) -> String {
         "Bytes per fluid particle: all memory the run allocated (boundary particles, the grid and scratch \
          included) over the fluid particles. The memory floor is the step's compulsory memory traffic (every \
          per-particle array each pass reads or writes, once; `bench::compulsory_bytes`) over the measured copy \
-         bandwidth. Operations: a step's floating-point operations, counted by running it on the CPU backend \
-         with a number type that counts them (`operation_count`): the physics, in the run's precision, plus the \
-         neighbor candidates' distance filter, 8 f64 operations each in both precisions. The arithmetic floor is \
-         those at the GPU's peak rates.\n"
+         bandwidth. Operations: a step's floating-point operations on the device, counted by running its kernels on the \
+         CPU with a number type that counts them (`operation_count`): the physics, in the run's precision, plus \
+         the neighbor candidates' distance filter, 8 f64 operations each in both precisions, in each of the \
+         three neighbor passes. The arithmetic floor is those at the GPU's peak rates. The CPU backend filters \
+         once a step and its other two passes read the neighbor lists it recorded, so its achieved rate counts \
+         the device's operations, not its own.\n"
     );
     let _ = writeln!(
         out,

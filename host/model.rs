@@ -10,12 +10,12 @@ use crate::scene::{Precision, Scene, Viscosity, ViscosityOperator};
 use coil_kernels::acceleration::{
     acceleration_pass, AccelerationArgs, MorrisViscosity, StressDivergence, VelocityLaplacian, ViscousOperator,
 };
-use coil_kernels::cell_grid::Neighborhood;
+use coil_kernels::cell_grid::{Neighborhood, Neighbors};
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::hourglass_control::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
 use coil_kernels::shear_viscosity::{shear_viscosity_pass, ShearViscosityArgs};
-use coil_kernels::topology::{Open, Topology};
+use coil_kernels::topology::Open;
 use coil_kernels::velocity_gradient::{stress_pass, StressArgs};
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::Real;
@@ -29,14 +29,14 @@ pub trait Model<R: Real>: Copy + Send + Sync + 'static {
     /// Largest viscosity the run can reach (m^2/s), for the Eq. (10) bound.
     fn max_viscosity(&self) -> R;
     /// Velocity gradient and stress (when used), then accelerations, for all particles of
-    /// `state`, run by `backend`.
-    fn accelerations<B: Passes<R>, T: Topology>(&self, backend: &mut B, state: ParticleState<'_, R, T>);
+    /// `state`, run by `backend`, visiting neighbors through `N`.
+    fn accelerations<N: Neighbors, B: Passes<R, N>>(&self, backend: &mut B, state: ParticleState<'_, R, N>);
 }
 
 /// What the acceleration passes read and write, as views a backend built over its own memory.
 #[derive(Clone, Copy)]
-pub struct ParticleState<'a, R, T = Open> {
-    pub neighborhood: Neighborhood<'a, T>,
+pub struct ParticleState<'a, R, N = Neighborhood<'a, Open>> {
+    pub neighborhood: N,
     pub fluid: Fluid<R>,
     pub id: View<'a, u32>,
     pub velocity: Vec3View<'a, R>,
@@ -50,9 +50,9 @@ pub struct ParticleState<'a, R, T = Open> {
     pub acceleration: Vec3ViewMut<'a, R>,
 }
 
-impl<'a, R: Real, T: Topology> ParticleState<'a, R, T> {
+impl<'a, R: Real, N: Neighbors> ParticleState<'a, R, N> {
     /// The acceleration pass's arguments with viscous operator `viscous`.
-    pub fn acceleration_args<Op: ViscousOperator<R>>(&self, viscous: Op) -> AccelerationArgs<'a, R, Op, T> {
+    pub fn acceleration_args<Op: ViscousOperator<R>>(&self, viscous: Op) -> AccelerationArgs<'a, R, Op, N> {
         AccelerationArgs {
             neighborhood: self.neighborhood,
             fluid: self.fluid,
@@ -64,12 +64,13 @@ impl<'a, R: Real, T: Topology> ParticleState<'a, R, T> {
     }
 }
 
-/// A backend's way of running the kernels whose arguments depend on the model.
-pub trait Passes<R: Real> {
-    fn stress<Rh: Rheology<R>, T: Topology>(&mut self, args: StressArgs<'_, R, Rh, T>);
-    fn shear_viscosity<Rh: Rheology<R>, T: Topology>(&mut self, args: ShearViscosityArgs<'_, R, Rh, T>);
-    fn velocity_gradient<Rh: Rheology<R>, T: Topology>(&mut self, args: VelocityGradientArgs<'_, R, Rh, T>);
-    fn acceleration<Op: ViscousOperator<R>, T: Topology>(&mut self, args: AccelerationArgs<'_, R, Op, T>);
+/// A backend's way of running the kernels whose arguments depend on the model, with neighbors
+/// visited through `N`.
+pub trait Passes<R: Real, N: Neighbors> {
+    fn stress<Rh: Rheology<R>>(&mut self, args: StressArgs<'_, R, Rh, N>);
+    fn shear_viscosity<Rh: Rheology<R>>(&mut self, args: ShearViscosityArgs<'_, R, Rh, N>);
+    fn velocity_gradient<Rh: Rheology<R>>(&mut self, args: VelocityGradientArgs<'_, R, Rh, N>);
+    fn acceleration<Op: ViscousOperator<R>>(&mut self, args: AccelerationArgs<'_, R, Op, N>);
 }
 
 /// The CPU backend's passes: each kernel function over `n` particles with rayon.
@@ -77,17 +78,17 @@ pub struct CpuPasses {
     pub n: usize,
 }
 
-impl<R: Real> Passes<R> for CpuPasses {
-    fn stress<Rh: Rheology<R>, T: Topology>(&mut self, args: StressArgs<'_, R, Rh, T>) {
+impl<R: Real, N: Neighbors + Sync> Passes<R, N> for CpuPasses {
+    fn stress<Rh: Rheology<R>>(&mut self, args: StressArgs<'_, R, Rh, N>) {
         launch(self.n, |i| stress_pass(i, &args));
     }
-    fn shear_viscosity<Rh: Rheology<R>, T: Topology>(&mut self, args: ShearViscosityArgs<'_, R, Rh, T>) {
+    fn shear_viscosity<Rh: Rheology<R>>(&mut self, args: ShearViscosityArgs<'_, R, Rh, N>) {
         launch(self.n, |i| shear_viscosity_pass(i, &args));
     }
-    fn velocity_gradient<Rh: Rheology<R>, T: Topology>(&mut self, args: VelocityGradientArgs<'_, R, Rh, T>) {
+    fn velocity_gradient<Rh: Rheology<R>>(&mut self, args: VelocityGradientArgs<'_, R, Rh, N>) {
         launch(self.n, |i| velocity_gradient_pass(i, &args));
     }
-    fn acceleration<Op: ViscousOperator<R>, T: Topology>(&mut self, args: AccelerationArgs<'_, R, Op, T>) {
+    fn acceleration<Op: ViscousOperator<R>>(&mut self, args: AccelerationArgs<'_, R, Op, N>) {
         launch(self.n, |i| acceleration_pass(i, &args));
     }
 }
@@ -169,7 +170,7 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for StressModel<Rh> {
     fn max_viscosity(&self) -> R {
         self.0.max_viscosity()
     }
-    fn accelerations<B: Passes<R>, T: Topology>(&self, backend: &mut B, s: ParticleState<'_, R, T>) {
+    fn accelerations<N: Neighbors, B: Passes<R, N>>(&self, backend: &mut B, s: ParticleState<'_, R, N>) {
         let stress = s.stress.expect("the stress operator allocates stress");
         backend.stress(StressArgs {
             neighborhood: s.neighborhood,
@@ -191,7 +192,7 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for HourglassStressModel<Rh, R
     fn max_viscosity(&self) -> R {
         self.rheology.max_viscosity()
     }
-    fn accelerations<B: Passes<R>, T: Topology>(&self, backend: &mut B, s: ParticleState<'_, R, T>) {
+    fn accelerations<N: Neighbors, B: Passes<R, N>>(&self, backend: &mut B, s: ParticleState<'_, R, N>) {
         let gradient = s.velocity_gradient.expect("hourglass control allocates the velocity gradient");
         let viscosity = s.viscosity.expect("hourglass control allocates viscosity");
         backend.velocity_gradient(VelocityGradientArgs {
@@ -220,7 +221,7 @@ impl<R: Real> Model<R> for LaplacianModel<R> {
     fn max_viscosity(&self) -> R {
         self.0.max_viscosity()
     }
-    fn accelerations<B: Passes<R>, T: Topology>(&self, backend: &mut B, s: ParticleState<'_, R, T>) {
+    fn accelerations<N: Neighbors, B: Passes<R, N>>(&self, backend: &mut B, s: ParticleState<'_, R, N>) {
         backend.acceleration(s.acceleration_args(VelocityLaplacian { nu0: self.0.nu0, velocity: s.velocity }));
     }
 }
@@ -233,7 +234,7 @@ impl<R: Real> Model<R> for MorrisModel<R> {
     fn max_viscosity(&self) -> R {
         self.0.max_viscosity()
     }
-    fn accelerations<B: Passes<R>, T: Topology>(&self, backend: &mut B, s: ParticleState<'_, R, T>) {
+    fn accelerations<N: Neighbors, B: Passes<R, N>>(&self, backend: &mut B, s: ParticleState<'_, R, N>) {
         backend.acceleration(s.acceleration_args(MorrisViscosity { velocity: s.velocity, viscosity: self.0 }));
     }
 }
@@ -246,7 +247,7 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for ShearThinningMorrisModel<R
     fn max_viscosity(&self) -> R {
         self.0.max_viscosity()
     }
-    fn accelerations<B: Passes<R>, T: Topology>(&self, backend: &mut B, s: ParticleState<'_, R, T>) {
+    fn accelerations<N: Neighbors, B: Passes<R, N>>(&self, backend: &mut B, s: ParticleState<'_, R, N>) {
         let viscosity = s.viscosity.expect("the shear-thinning Morris operator allocates viscosity");
         backend.shear_viscosity(ShearViscosityArgs {
             neighborhood: s.neighborhood,

@@ -1,5 +1,6 @@
 //! Drives the neighbor grid on the CPU: hashing, the counting sort and the reorder of every
-//! particle field (Algorithm 1, line 3). Also drops particles that left the domain box.
+//! particle field (Algorithm 1, line 3), and the CPU backend's neighbor lists. Also drops
+//! particles that left the domain box.
 
 use crate::parallel::launch;
 use crate::particles::{view_mut, Particles};
@@ -9,6 +10,7 @@ use coil_kernels::counting_sort::{
     scatter, sort_bucket, sum_chunk, Counters, ScanStep,
 };
 use coil_kernels::fluid_cells::{holds_fluid_pass, near_fluid_pass, HoldsFluidArgs, NearFluidArgs};
+use coil_kernels::neighbor_list::{neighbor_list_pass, ListedNeighborhood, NeighborListArgs, NEIGHBOR_SLOTS};
 use coil_kernels::topology::{Open, Periodic, Topology};
 use coil_kernels::view::{Vec3View, View, ViewMut};
 use coil_kernels::Real;
@@ -34,6 +36,8 @@ pub struct NeighborGrid {
     /// Ids below this are fixed boundary particles at rest, whose cells each sort marks; `None`
     /// marks every cell near fluid.
     resting_boundary: Option<u32>,
+    /// `NEIGHBOR_SLOTS` per particle of capacity once `keep_neighbor_lists` allocates them.
+    neighbor_list: Vec<u32>,
 }
 
 /// How far below the support radius (relative) a periodic axis's cells may fall: a period
@@ -66,6 +70,7 @@ impl NeighborGrid {
             holds_fluid: Vec::new(),
             near_fluid: vec![1; buckets - 1],
             resting_boundary: None,
+            neighbor_list: Vec::new(),
         }
     }
 
@@ -82,9 +87,43 @@ impl NeighborGrid {
         self.resting_boundary
     }
 
+    /// Allocates the neighbor lists (`coil_kernels::neighbor_list`) for every particle of
+    /// capacity, so that `record_neighbors` can fill them: on the CPU backend only.
+    pub fn keep_neighbor_lists(&mut self) {
+        self.neighbor_list = vec![0; self.order.len() * NEIGHBOR_SLOTS];
+    }
+
+    /// Whether the grid keeps neighbor lists.
+    pub fn keeps_neighbor_lists(&self) -> bool {
+        !self.neighbor_list.is_empty()
+    }
+
+    /// Records the neighbors within `h2` (m^2) of the sorted particles at `position`, in
+    /// topology `topology`, when the grid keeps lists.
+    pub fn record_neighbors<R: Real, T: Topology>(&mut self, position: Vec3View<f64>, h2: R, topology: T) {
+        if self.neighbor_list.is_empty() {
+            return;
+        }
+        let n = position.x.len();
+        let mut list = std::mem::take(&mut self.neighbor_list);
+        let args = NeighborListArgs {
+            neighborhood: self.neighborhood(position, topology),
+            h2,
+            list: view_mut(&mut list, n * NEIGHBOR_SLOTS),
+        };
+        launch(n, |i| neighbor_list_pass(i, &args));
+        self.neighbor_list = list;
+    }
+
+    /// The neighbors of the particles at `position` as the last `record_neighbors` over these
+    /// positions found them, for a grid that keeps lists.
+    pub fn listed_neighborhood<'a, T: Topology>(&'a self, position: Vec3View<'a, f64>, topology: T) -> ListedNeighborhood<'a, T> {
+        ListedNeighborhood { grid: self.neighborhood(position, topology), list: View::new(&self.neighbor_list) }
+    }
+
     /// Bytes of the grid's own arrays.
     pub fn bytes(&self) -> usize {
-        4 * (self.cell_key.len() + self.counters.len() + self.cell_start.len() + self.order.len())
+        4 * (self.cell_key.len() + self.counters.len() + self.cell_start.len() + self.order.len() + self.neighbor_list.len())
             + self.holds_fluid.len()
             + self.near_fluid.len()
     }

@@ -149,7 +149,8 @@ pub fn counting<T>(work: impl FnOnce() -> T) -> (T, StepOperations) {
 }
 
 /// The operations of the second step of `scene` (the first also sets up what later steps
-/// reuse), on the CPU backend.
+/// reuse): the device's kernels run on the CPU, visiting neighbors through the grid as the
+/// device does (`Simulation::for_device`), not through the CPU backend's lists.
 pub fn count_step_operations(scene: &Scene, initial: &InitialParticles) -> Result<StepOperations, String> {
     with_model::<Counted, _>(scene, CountStep { scene, initial })
 }
@@ -162,7 +163,7 @@ struct CountStep<'a> {
 impl WithModel for CountStep<'_> {
     type Output = Result<StepOperations, String>;
     fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
-        let mut sim = Simulation::<R, M>::new(self.scene, self.initial, model);
+        let mut sim = Simulation::<R, M>::for_device(self.scene, self.initial, model);
         let step = |sim: &mut Simulation<R, M>| {
             let (dt, limit) = sim.next_dt();
             sim.step_with(dt, limit).map_err(|i| format!("the counted step went unstable: {i}"))

@@ -6,11 +6,13 @@
 use crate::model::{with_precision_and_model, Model, WithModel};
 use crate::particles::Particles;
 use crate::scene::Scene;
+use coil_kernels::neighbor_list::NEIGHBOR_SLOTS;
 use coil_kernels::Real;
 
 /// Bytes per particle beyond its arrays while the run allocates them: setup's position and
-/// velocity (or mirror image) in f64, and the neighbor grid's cell key and sorted order (u32).
-const SETUP_AND_GRID_BYTES: usize = 2 * 3 * 8 + 2 * 4;
+/// velocity (or mirror image) in f64, the neighbor grid's cell key and sorted order (u32), and
+/// the CPU backend's neighbor list (a device run's host holds no list: the limit is the CPU's).
+const SETUP_AND_GRID_BYTES: usize = 2 * 3 * 8 + 2 * 4 + 4 * NEIGHBOR_SLOTS;
 
 /// The most particles, walls and fluid capacity together, a run of one scene can hold here.
 #[derive(Debug, Clone)]

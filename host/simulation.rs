@@ -9,6 +9,7 @@ use crate::particles::{mat3_view_mut, stress_view_mut, vec3_view, vec3_view_mut,
 use crate::scene::{DensityKernel, Scene, Walls};
 use crate::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, InitialParticles};
 use crate::time_step::{Limit, StabilityBound, TimeStepper};
+use coil_kernels::cell_grid::Neighbors;
 use coil_kernels::density::{density_pass, DensityArgs, Poly6, Spiky};
 use coil_kernels::diagnostics::{range_figures, DiagnosticsArgs, StateFigures};
 use coil_kernels::fluid::Fluid;
@@ -99,8 +100,19 @@ pub struct Simulation<R: Real, M: Model<R>> {
 }
 
 impl<R: Real, M: Model<R>> Simulation<R, M> {
-    /// Sets up a run of `scene` with the particles `initial`.
+    /// Sets up a run of `scene` with the particles `initial` on the CPU backend.
     pub fn new(scene: &Scene, initial: &InitialParticles, model: M) -> Self {
+        Self::set_up(scene, initial, model, true)
+    }
+
+    /// Sets up a run for a device backend: the host keeps no neighbor lists, and its own
+    /// passes (the setup's density, and the steps of an operation count, which counts the
+    /// device's work) visit neighbors through the grid as the device does.
+    pub fn for_device(scene: &Scene, initial: &InitialParticles, model: M) -> Self {
+        Self::set_up(scene, initial, model, false)
+    }
+
+    fn set_up(scene: &Scene, initial: &InitialParticles, model: M, neighbor_lists: bool) -> Self {
         let mat = &scene.material;
         let h = scene.support_radius();
         let s = mat.particle_spacing_m;
@@ -164,6 +176,9 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         };
         if sim.wall_mirror.is_none() {
             sim.grid.track_fluid(fluid.boundary_count);
+        }
+        if neighbor_lists {
+            sim.grid.keep_neighbor_lists();
         }
         sim.sort_and_density();
         sim.diagnostics.max_speed = start_speed;
@@ -239,8 +254,9 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         self.check()
     }
 
-    /// Algorithm 1, line 3: neighbors, dropping particles that left the domain; lines 5-8:
-    /// density (pressure is evaluated from it where it is read).
+    /// Algorithm 1, line 3: neighbors, dropping particles that left the domain, and their
+    /// lists where the run keeps them; lines 5-8: density (pressure is evaluated from it where
+    /// it is read).
     fn sort_and_density(&mut self) {
         let removed = self.grid.sort(&mut self.particles);
         self.count_removed(removed);
@@ -254,14 +270,15 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
     fn density<T: Topology>(&mut self, topology: T) {
         let p = &mut self.particles;
         let n = p.len();
-        let args = DensityArgs {
-            neighborhood: self.grid.neighborhood(vec3_view(&p.position, n), topology),
-            fluid: self.fluid,
-            density: view_mut(&mut p.density, n),
-        };
-        match self.density_kernel {
-            DensityKernel::Poly6 => launch(n, |i| density_pass::<R, Poly6, T>(i, &args)),
-            DensityKernel::Spiky => launch(n, |i| density_pass::<R, Spiky, T>(i, &args)),
+        self.grid.record_neighbors(vec3_view(&p.position, n), self.fluid.kernels.h2, topology);
+        let (grid, position) = (&self.grid, vec3_view(&p.position, n));
+        let density = view_mut(&mut p.density, n);
+        if grid.keeps_neighbor_lists() {
+            let neighborhood = grid.listed_neighborhood(position, topology);
+            density_passes(self.density_kernel, n, DensityArgs { neighborhood, fluid: self.fluid, density });
+        } else {
+            let neighborhood = grid.neighborhood(position, topology);
+            density_passes(self.density_kernel, n, DensityArgs { neighborhood, fluid: self.fluid, density });
         }
     }
 
@@ -283,18 +300,12 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             launch(n, |i| mirrored_wall_pass(i, &args));
         }
         // Lines 9-16: velocity gradient and stress, accelerations.
-        let state = ParticleState {
-            neighborhood: self.grid.neighborhood(vec3_view(&p.position, n), topology),
-            fluid: self.fluid,
-            id: View::new(&p.id[..n]),
-            velocity: vec3_view(&p.velocity, n),
-            density: View::new(&p.density[..n]),
-            stress: p.stress.as_mut().map(|s| stress_view_mut(s, n)),
-            viscosity: p.viscosity.as_mut().map(|v| view_mut(v, n)),
-            velocity_gradient: p.velocity_gradient.as_mut().map(|g| mat3_view_mut(g, n)),
-            acceleration: vec3_view_mut(&mut p.acceleration, n),
-        };
-        self.model.accelerations(&mut CpuPasses { n }, state);
+        let grid = &self.grid;
+        if grid.keeps_neighbor_lists() {
+            accelerations(&self.model, self.fluid, p, |position| grid.listed_neighborhood(position, topology));
+        } else {
+            accelerations(&self.model, self.fluid, p, |position| grid.neighborhood(position, topology));
+        }
         // Fluid inside a nozzle's tube moves with the jet (paper Sec. III-C; see `nozzle`).
         for inlet in &self.inlets {
             let args = NozzleArgs {
@@ -324,7 +335,6 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         }
     }
 
-    /// Counts particles an inlet just added.
     /// Counts the particles an injection added, and notes when the inlets first found the
     /// fluid capacity full.
     pub(crate) fn count_injected(&mut self, added: usize) {
@@ -440,4 +450,35 @@ pub(crate) fn inject<R: Real>(
         added += inlet.inject(time, dt, room - added, next_id, p);
     }
     added
+}
+
+/// The density pass over `n` particles with the density kernel `kernel`.
+fn density_passes<R: Real, N: Neighbors + Sync>(kernel: DensityKernel, n: usize, args: DensityArgs<R, N>) {
+    match kernel {
+        DensityKernel::Poly6 => launch(n, |i| density_pass::<R, Poly6, N>(i, &args)),
+        DensityKernel::Spiky => launch(n, |i| density_pass::<R, Spiky, N>(i, &args)),
+    }
+}
+
+/// The model's passes over the particles `p`, visiting neighbors through what `neighborhood`
+/// builds over their positions.
+fn accelerations<'a, R: Real, M: Model<R>, N: Neighbors + Sync>(
+    model: &M,
+    fluid: Fluid<R>,
+    p: &'a mut Particles<R>,
+    neighborhood: impl FnOnce(Vec3View<'a, f64>) -> N,
+) {
+    let n = p.len();
+    let state = ParticleState {
+        neighborhood: neighborhood(vec3_view(&p.position, n)),
+        fluid,
+        id: View::new(&p.id[..n]),
+        velocity: vec3_view(&p.velocity, n),
+        density: View::new(&p.density[..n]),
+        stress: p.stress.as_mut().map(|s| stress_view_mut(s, n)),
+        viscosity: p.viscosity.as_mut().map(|v| view_mut(v, n)),
+        velocity_gradient: p.velocity_gradient.as_mut().map(|g| mat3_view_mut(g, n)),
+        acceleration: vec3_view_mut(&mut p.acceleration, n),
+    };
+    model.accelerations(&mut CpuPasses { n }, state);
 }

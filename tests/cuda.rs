@@ -223,7 +223,7 @@ fn both_with<R: Real, M: Model<R>>(
 ) -> (Simulation<R, M>, GpuSimulation<R, M>) {
     let initial = initial_particles(scene, "test scene").expect("valid");
     let mut cpu = Simulation::<R, M>::new(scene, &initial, model);
-    let mut on_gpu = GpuSimulation::new(Simulation::<R, M>::new(scene, &initial, model), gpu).expect("device state");
+    let mut on_gpu = GpuSimulation::new(Simulation::<R, M>::for_device(scene, &initial, model), gpu).expect("device state");
     on_gpu.check_every = 1;
     for _ in 0..steps {
         cpu.step_with(dt, coil::time_step::Limit::Acoustic).expect("stable on the CPU");
@@ -362,7 +362,7 @@ fn an_unstable_gpu_run_is_stopped_by_the_guard() {
         let initial = initial_particles(&scene, "dam_break.toml").expect("valid");
         let model = cross::<f32>(&scene);
         let mut sim =
-            GpuSimulation::new(Simulation::<f32, _>::new(&scene, &initial, model), engine.open()).expect("device state");
+            GpuSimulation::new(Simulation::<f32, _>::for_device(&scene, &initial, model), engine.open()).expect("device state");
         sim.check_every = 1;
         let bound = sim.host.stepper.bound.dt().0;
         let stopped = (0..2000).find_map(|_| sim.step_with(50.0 * bound, coil::time_step::Limit::Fixed).err());
@@ -659,7 +659,7 @@ fn random_stages(engine: Engine, seed: u64) {
             near_fluid: View::new(&everywhere),
         };
         let density_args = DensityArgs { neighborhood, fluid, density: ViewMut::new(&mut density) };
-        (0..live).for_each(|i| density_pass::<f64, Poly6, Open>(i, &density_args));
+        (0..live).for_each(|i| density_pass::<f64, Poly6, _>(i, &density_args));
         let [xx, yy, zz, xy, xz, yz] = &mut stress;
         let stress_view = SymTensorViewMut {
             xx: ViewMut::new(xx),
@@ -677,7 +677,7 @@ fn random_stages(engine: Engine, seed: u64) {
             density: View::new(&density),
             stress: stress_view,
         };
-        (0..live).for_each(|i| stress_pass::<f64, Cross<f64>, Open>(i, &stress_args));
+        (0..live).for_each(|i| stress_pass::<f64, Cross<f64>, _>(i, &stress_args));
         let [ax, ay, az] = &mut acceleration;
         let acceleration_args = AccelerationArgs {
             neighborhood,
@@ -687,7 +687,7 @@ fn random_stages(engine: Engine, seed: u64) {
             density: View::new(&density),
             acceleration: Vec3ViewMut::new(ax, ay, az),
         };
-        (0..live).for_each(|i| acceleration_pass::<f64, StressDivergence<f64>, Open>(i, &acceleration_args));
+        (0..live).for_each(|i| acceleration_pass::<f64, StressDivergence<f64>, _>(i, &acceleration_args));
     }
 
     let sorted_on_device = sorted.each_ref().map(|p| on_device(&gpu, p));
@@ -793,8 +793,9 @@ fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
 /// Bytes the device holds once `model`'s run of `scene` is on it, and what the run counts (`device_bytes`, the figure `coil run` prints and the README's memory table comes from).
 fn held_and_counted<R: Real, M: Model<R>>(scene: &Scene, model: M) -> (usize, usize) {
     let initial = initial_particles(scene, "dam_break.toml").expect("particles");
-    let mut on_gpu = GpuSimulation::new(Simulation::<R, M>::new(scene, &initial, model), Gpu::emulated_with_memory(usize::MAX))
-        .expect("device state");
+    let mut on_gpu =
+        GpuSimulation::new(Simulation::<R, M>::for_device(scene, &initial, model), Gpu::emulated_with_memory(usize::MAX))
+            .expect("device state");
     let (free, total) = on_gpu.gpu().memory();
     (total - free, on_gpu.device_bytes())
 }

@@ -3,6 +3,7 @@
 mod common;
 
 use coil::scene::DensityKernel;
+use coil_kernels::cell_grid::Neighbors;
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::{leapfrog_pass, LeapfrogArgs};
@@ -349,6 +350,68 @@ fn the_periodic_neighbor_loop_finds_exactly_the_nearest_images_within_h() {
             for a in 0..3 {
                 assert!((f.1[a] - e.1[a]).abs() < 1e-12, "particle {i}: {f:?} against {e:?}");
             }
+        }
+    }
+}
+
+/// The CPU backend's lists visit what the grid's loop visits, in its order and with its
+/// offsets to the bit, in f32 and f64, open and periodic, for particles with few neighbors and
+/// for particles in a cluster with more than the lists hold (visited through the grid).
+#[test]
+fn the_neighbor_lists_visit_the_grids_neighbors_in_its_order_to_the_bit() {
+    use coil::neighbor_grid::NeighborGrid;
+    use coil::particles::{ModelFields, Particles};
+    use coil_kernels::cell_grid::Neighborhood;
+    use coil_kernels::neighbor_list::NEIGHBOR_SLOTS;
+    fn visits<R: Real, N: Neighbors>(nb: &N, i: usize, h2: R) -> Vec<(usize, [u64; 3], u64)> {
+        let mut v = Vec::new();
+        nb.for_each_neighbor(i, h2, |j, r: Vec3<R>, r2: R| {
+            v.push((j, [r.x, r.y, r.z].map(|c| c.to_f64().to_bits()), r2.to_f64().to_bits()))
+        });
+        v
+    }
+    fn compare<R: Real, T: coil_kernels::topology::Topology>(grid: &mut NeighborGrid, p: &Particles<f64>, h: f64, topology: T) {
+        let h2 = R::from_f64(h * h);
+        grid.record_neighbors(p.position_view(), h2, topology);
+        let (listed, plain): (_, Neighborhood<T>) =
+            (grid.listed_neighborhood(p.position_view(), topology), grid.neighborhood(p.position_view(), topology));
+        let (mut few, mut many) = (0, 0);
+        for i in 0..p.len() {
+            let expected = visits(&plain, i, h2);
+            if expected.len() < NEIGHBOR_SLOTS {
+                few += 1;
+            } else {
+                many += 1;
+            }
+            assert_eq!(visits(&listed, i, h2), expected, "particle {i}");
+        }
+        assert!(few > 100 && many > 20, "{few} particles with a list, {many} beyond it");
+    }
+    let h = 0.1;
+    let (min, max) = ([0.0, 0.0, 0.0], [0.34, 0.5, 0.51]);
+    let mut state = 5u64;
+    let mut points: Vec<[f64; 3]> =
+        (0..400).map(|_| [0, 1, 2].map(|a| min[a] + uniform(&mut state) * (max[a] - min[a]))).collect();
+    // A cluster 0.06 m across, straddling the periodic seam at x = 0.
+    points.extend((0..120).map(|_| {
+        let mut u = || 0.06 * uniform(&mut state);
+        [(u() - 0.03).rem_euclid(max[0]), 0.2 + u(), 0.2 + u()]
+    }));
+    for periodic in [[false; 3], [true, false, true]] {
+        let mut grid = NeighborGrid::new(min, max, h, periodic, points.len());
+        grid.keep_neighbor_lists();
+        let mut p = Particles::<f64>::with_capacity(points.len(), ModelFields::default());
+        for (id, &x) in points.iter().enumerate() {
+            p.push(id as u32, x, [0.0; 3]);
+        }
+        assert_eq!(grid.sort(&mut p), 0);
+        if periodic[0] {
+            let topology = grid.periodic;
+            compare::<f32, _>(&mut grid, &p, h, topology);
+            compare::<f64, _>(&mut grid, &p, h, topology);
+        } else {
+            compare::<f32, _>(&mut grid, &p, h, Open);
+            compare::<f64, _>(&mut grid, &p, h, Open);
         }
     }
 }
@@ -716,7 +779,7 @@ fn rigid_rotation_spin_down_rates() -> [f64; 4] {
     let nb = grid.neighborhood(vec3_view(&p.position, n), Open);
     {
         let args = DensityArgs { neighborhood: nb, fluid, density: ViewMut::new(&mut p.density[..n]) };
-        (0..n).for_each(|i| density_pass::<f64, Poly6, Open>(i, &args));
+        (0..n).for_each(|i| density_pass::<f64, Poly6, _>(i, &args));
     }
     let velocity = vec3_view(&p.velocity, n);
     let density = View::new(&p.density[..n]);

@@ -234,17 +234,17 @@ impl GpuPasses<'_> {
     }
 }
 
-impl<R: Real> Passes<R> for GpuPasses<'_> {
-    fn stress<Rh: Rheology<R>, T: Topology>(&mut self, args: StressArgs<'_, R, Rh, T>) {
+impl<R: Real, T: Topology> Passes<R, Neighborhood<'static, T>> for GpuPasses<'_> {
+    fn stress<Rh: Rheology<R>>(&mut self, args: StressArgs<'_, R, Rh, Neighborhood<'static, T>>) {
         self.run(kernel::<R>("stress", Rh::NAME, T::NAME), args);
     }
-    fn shear_viscosity<Rh: Rheology<R>, T: Topology>(&mut self, args: ShearViscosityArgs<'_, R, Rh, T>) {
+    fn shear_viscosity<Rh: Rheology<R>>(&mut self, args: ShearViscosityArgs<'_, R, Rh, Neighborhood<'static, T>>) {
         self.run(kernel::<R>("shear_viscosity", Rh::NAME, T::NAME), args);
     }
-    fn velocity_gradient<Rh: Rheology<R>, T: Topology>(&mut self, args: VelocityGradientArgs<'_, R, Rh, T>) {
+    fn velocity_gradient<Rh: Rheology<R>>(&mut self, args: VelocityGradientArgs<'_, R, Rh, Neighborhood<'static, T>>) {
         self.run(kernel::<R>("velocity_gradient", Rh::NAME, T::NAME), args);
     }
-    fn acceleration<Op: ViscousOperator<R>, T: Topology>(&mut self, args: AccelerationArgs<'_, R, Op, T>) {
+    fn acceleration<Op: ViscousOperator<R>>(&mut self, args: AccelerationArgs<'_, R, Op, Neighborhood<'static, T>>) {
         self.run(kernel::<R>("acceleration", Op::NAME, T::NAME), args);
     }
 }

@@ -1,12 +1,12 @@
 //! Accelerations (Algorithm 1, lines 14-15): pressure, viscosity and gravity.
 
-use crate::cell_grid::Neighborhood;
+use crate::cell_grid::{Neighborhood, Neighbors};
 use crate::cross_viscosity::Newtonian;
 use crate::density::pressure;
 use crate::fluid::Fluid;
 use crate::real::Real;
 use crate::smoothing::SmoothingKernels;
-use crate::topology::{Open, Topology};
+use crate::topology::Open;
 use crate::vec3::{SymTensor, Vec3};
 use crate::view::{SymTensorView, Vec3View, Vec3ViewMut, View};
 
@@ -180,9 +180,9 @@ impl<R: Real, Nu: ParticleViscosity<R>> ViscousOperator<R> for MorrisViscosity<'
 /// 1/2 is `fluid.pressure_pair_weight`), plus the viscous operator, plus gravity. Symmetric in
 /// i and j: pair forces cancel.
 #[inline(always)]
-pub fn acceleration<R: Real, Op: ViscousOperator<R>, T: Topology>(
+pub fn acceleration<R: Real, Op: ViscousOperator<R>, N: Neighbors>(
     i: usize,
-    neighborhood: &Neighborhood<T>,
+    neighborhood: &N,
     density: &View<R>,
     fluid: &Fluid<R>,
     viscous: &Op,
@@ -204,8 +204,8 @@ pub fn acceleration<R: Real, Op: ViscousOperator<R>, T: Topology>(
 /// Arguments of the acceleration pass.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
-pub struct AccelerationArgs<'a, R, Op, T = Open> {
-    pub neighborhood: Neighborhood<'a, T>,
+pub struct AccelerationArgs<'a, R, Op, N = Neighborhood<'a, Open>> {
+    pub neighborhood: N,
     pub fluid: Fluid<R>,
     pub viscous: Op,
     pub id: View<'a, u32>,
@@ -215,7 +215,7 @@ pub struct AccelerationArgs<'a, R, Op, T = Open> {
 
 /// The acceleration pass for particle `i`; fixed boundary particles get zero.
 #[inline(always)]
-pub fn acceleration_pass<R: Real, Op: ViscousOperator<R>, T: Topology>(i: usize, a: &AccelerationArgs<R, Op, T>) {
+pub fn acceleration_pass<R: Real, Op: ViscousOperator<R>, N: Neighbors>(i: usize, a: &AccelerationArgs<R, Op, N>) {
     let acc = if a.fluid.is_boundary(a.id.at(i)) {
         Vec3::zero()
     } else {

@@ -103,28 +103,54 @@ pub struct Neighborhood<'a, T = Open> {
     pub near_fluid: View<'a, u8>,
 }
 
-impl<T: Topology> Neighborhood<'_, T> {
+/// The particles within h of a particle, as the neighbor passes (density, velocity gradient,
+/// accelerations) visit them: through the cells of the grid ([`Neighborhood`]), or through the
+/// list the CPU backend records once a step ([`crate::neighbor_list::ListedNeighborhood`]).
+/// Both visit the same particles in the same order with the same offsets, so a pass's sums,
+/// and so a run, are the same to the bit either way.
+pub trait Neighbors: Copy {
     /// Calls `f(j, x_i - x_j, |x_i - x_j|^2)` for every particle j with |x_i - x_j| < h,
     /// including i itself, in a fixed order (cells in index order, then sorted order). Across a
     /// periodic face x_i - x_j is the nearest image's.
-    #[inline(always)]
-    pub fn for_each_neighbor<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, i: usize, h2: R, f: F) {
-        self.for_each_particle_near(self.position.at(i), h2, f);
-    }
+    fn for_each_neighbor<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, i: usize, h2: R, f: F);
 
     /// Whether fluid may lie within h of particle `i`; false where every particle within h is a
     /// fixed boundary particle (`fluid_cells`), or where `i` has left the domain box and the
     /// neighbor loop finds nothing.
+    fn near_fluid(&self, i: usize) -> bool;
+}
+
+impl<T: Topology> Neighbors for Neighborhood<'_, T> {
     #[inline(always)]
-    pub fn near_fluid(&self, i: usize) -> bool {
+    fn for_each_neighbor<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, i: usize, h2: R, f: F) {
+        self.for_each_particle_near(self.position.at(i), h2, f);
+    }
+
+    #[inline(always)]
+    fn near_fluid(&self, i: usize) -> bool {
         match self.grid.cell_coords(self.position.at(i)) {
             Some(c) => self.near_fluid.at(self.grid.linear_index(c) as usize) != 0,
             None => false,
         }
     }
+}
+
+impl<T: Topology> Neighborhood<'_, T> {
+    /// x - x_j (m) for a point `x` and particle `j`: across a periodic face the nearest
+    /// image's, as each neighbor loop takes it.
+    #[inline(always)]
+    pub fn offset(&self, x: [f64; 3], j: usize) -> [f64; 3] {
+        let d = [x[0] - self.position.x.at(j), x[1] - self.position.y.at(j), x[2] - self.position.z.at(j)];
+        if T::PERIODIC {
+            let period = self.topology.periods();
+            [minimum_image(d[0], period[0]), minimum_image(d[1], period[1]), minimum_image(d[2], period[2])]
+        } else {
+            d
+        }
+    }
 
     /// Calls `f(j, x - x_j, |x - x_j|^2)` for every particle j with |x - x_j| < h around a point
-    /// `x` of the domain (m), in the order of [`Self::for_each_neighbor`]; none when `x` lies
+    /// `x` of the domain (m), in the order of [`Neighbors::for_each_neighbor`]; none when `x` lies
     /// outside the domain box.
     #[inline(always)]
     pub fn for_each_particle_near<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, x: [f64; 3], h2: R, f: F) {
@@ -155,9 +181,7 @@ impl<T: Topology> Neighborhood<'_, T> {
                 let end = self.cell_start.at(last + 1) as usize;
                 R::tally_candidates(end - start);
                 for j in start..end {
-                    let dx = xi[0] - self.position.x.at(j);
-                    let dy = xi[1] - self.position.y.at(j);
-                    let dz = xi[2] - self.position.z.at(j);
+                    let [dx, dy, dz] = self.offset(xi, j);
                     let r2 = dx * dx + dy * dy + dz * dz;
                     if r2 < h2_f64 {
                         let r_ij = Vec3::new(R::from_f64(dx), R::from_f64(dy), R::from_f64(dz));
@@ -193,9 +217,7 @@ impl<T: Topology> Neighborhood<'_, T> {
             let end = self.cell_start.at(self.grid.linear_index([x_hi, y, z]) as usize + 1) as usize;
             R::tally_candidates(end - start);
             for j in start..end {
-                let dx = minimum_image(xi[0] - self.position.x.at(j), period[0]);
-                let dy = minimum_image(xi[1] - self.position.y.at(j), period[1]);
-                let dz = minimum_image(xi[2] - self.position.z.at(j), period[2]);
+                let [dx, dy, dz] = self.offset(xi, j);
                 let r2 = dx * dx + dy * dy + dz * dz;
                 if r2 < h2_f64 {
                     let r_ij = Vec3::new(R::from_f64(dx), R::from_f64(dy), R::from_f64(dz));

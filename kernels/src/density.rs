@@ -1,10 +1,10 @@
 //! Density and pressure (Algorithm 1, lines 6-7).
 
-use crate::cell_grid::Neighborhood;
+use crate::cell_grid::{Neighborhood, Neighbors};
 use crate::fluid::Fluid;
 use crate::real::Real;
 use crate::smoothing::SmoothingKernels;
-use crate::topology::{Open, Topology};
+use crate::topology::Open;
 use crate::view::ViewMut;
 use core::fmt::Debug;
 
@@ -46,7 +46,7 @@ impl DensityKernel for Spiky {
 /// Density by direct summation, Eq. (5): rho_i = sum_j m_j W(x_ij) (kg/m^3), W being `K`.
 /// Boundary particles get theirs the same way (paper Sec. III-B).
 #[inline(always)]
-pub fn density<R: Real, K: DensityKernel, T: Topology>(i: usize, neighborhood: &Neighborhood<T>, fluid: &Fluid<R>) -> R {
+pub fn density<R: Real, K: DensityKernel, N: Neighbors>(i: usize, neighborhood: &N, fluid: &Fluid<R>) -> R {
     let mut sum = R::ZERO;
     neighborhood.for_each_neighbor(i, fluid.kernels.h2, |_, _, r2: R| sum += K::weight(&fluid.kernels, r2));
     sum * fluid.mass
@@ -61,8 +61,8 @@ pub fn pressure<R: Real>(density: R, fluid: &Fluid<R>) -> R {
 /// Arguments of the density pass.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
-pub struct DensityArgs<'a, R, T = Open> {
-    pub neighborhood: Neighborhood<'a, T>,
+pub struct DensityArgs<'a, R, N = Neighborhood<'a, Open>> {
+    pub neighborhood: N,
     pub fluid: Fluid<R>,
     pub density: ViewMut<'a, R>,
 }
@@ -70,7 +70,7 @@ pub struct DensityArgs<'a, R, T = Open> {
 /// The density pass for particle `i` with the density kernel `K`. Pressure is not stored:
 /// Eq. (6) is cheaper to evaluate where it is read than to load.
 #[inline(always)]
-pub fn density_pass<R: Real, K: DensityKernel, T: Topology>(i: usize, a: &DensityArgs<R, T>) {
+pub fn density_pass<R: Real, K: DensityKernel, N: Neighbors>(i: usize, a: &DensityArgs<R, N>) {
     // SAFETY: invocation i owns entry i.
-    unsafe { a.density.write(i, density::<R, K, T>(i, &a.neighborhood, &a.fluid)) };
+    unsafe { a.density.write(i, density::<R, K, N>(i, &a.neighborhood, &a.fluid)) };
 }

@@ -13,12 +13,12 @@
 //! alternating mode has no gradient, so it gets the full Laplacian's damping.
 
 use crate::acceleration::ViscousOperator;
-use crate::cell_grid::Neighborhood;
+use crate::cell_grid::{Neighborhood, Neighbors};
 use crate::cross_viscosity::Rheology;
 use crate::fluid::Fluid;
 use crate::real::Real;
 use crate::smoothing::SmoothingKernels;
-use crate::topology::{Open, Topology};
+use crate::topology::Open;
 use crate::vec3::{Mat3, SymTensor, Vec3};
 use crate::velocity_gradient::{rate_of_deformation, shear_rate, velocity_gradient};
 use crate::view::{Mat3View, Mat3ViewMut, Vec3View, View, ViewMut};
@@ -26,8 +26,8 @@ use crate::view::{Mat3View, Mat3ViewMut, Vec3View, View, ViewMut};
 /// Arguments of the velocity-gradient pass.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
-pub struct VelocityGradientArgs<'a, R, Rh, T = Open> {
-    pub neighborhood: Neighborhood<'a, T>,
+pub struct VelocityGradientArgs<'a, R, Rh, N = Neighborhood<'a, Open>> {
+    pub neighborhood: N,
     pub fluid: Fluid<R>,
     pub rheology: Rh,
     /// Velocity at the current full step (m/s).
@@ -42,7 +42,7 @@ pub struct VelocityGradientArgs<'a, R, Rh, T = Open> {
 /// The velocity-gradient pass for particle `i`: Eq. (8), and the viscosity at its shear rate
 /// (boundary particles included: the acceleration pass reads theirs).
 #[inline(always)]
-pub fn velocity_gradient_pass<R: Real, Rh: Rheology<R>, T: Topology>(i: usize, a: &VelocityGradientArgs<R, Rh, T>) {
+pub fn velocity_gradient_pass<R: Real, Rh: Rheology<R>, N: Neighbors>(i: usize, a: &VelocityGradientArgs<R, Rh, N>) {
     let grad = velocity_gradient(i, &a.neighborhood, &a.velocity, &a.density, &a.fluid);
     let nu = a.rheology.viscosity(shear_rate(rate_of_deformation(grad)));
     // SAFETY: invocation i owns entry i.

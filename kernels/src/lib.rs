@@ -5,7 +5,8 @@
 //! the very same functions as PTX kernels (see `ptx`). Physics is written once, here.
 //!
 //! Per step: [`cell_grid::hash_pass`], the [`counting_sort`] stages and a gather of every
-//! particle field, the [`fluid_cells`] marks, [`density::density_pass`] (Eq. 5, 6),
+//! particle field, the [`fluid_cells`] marks, on the CPU the [`neighbor_list`] pass,
+//! [`density::density_pass`] (Eq. 5, 6),
 //! [`mirrored_wall::mirrored_wall_pass`] (when the scene asks), [`velocity_gradient::stress_pass`]
 //! (Eq. 8, 2, 3; the paper's operator only) or [`shear_viscosity::shear_viscosity_pass`]
 //! (Eq. 8, 2, 3; Morris's operator with the Cross model only) or
@@ -36,6 +37,7 @@ pub mod fluid_cells;
 pub mod hourglass_control;
 pub mod leapfrog;
 pub mod mirrored_wall;
+pub mod neighbor_list;
 pub mod nozzle;
 pub mod real;
 pub mod shear_viscosity;

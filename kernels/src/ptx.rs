@@ -12,7 +12,7 @@
 //! argument and buffer of it, runs and is tested where no GPU is.
 
 use crate::acceleration::{acceleration_pass, AccelerationArgs, MorrisViscosity, StressDivergence, VelocityLaplacian};
-use crate::cell_grid::{hash_pass, HashArgs};
+use crate::cell_grid::{hash_pass, HashArgs, Neighborhood};
 use crate::counting_sort::{
     chunk_total, count_particle, gather, scan_chunk, scan_chunk_in_place, scan_chunk_offsets, scatter, sort_bucket, sum_chunk,
     Counters,
@@ -138,118 +138,135 @@ macro_rules! per_topology_kernels {
     };
 }
 
+/// A neighbor pass's entries for an open and for a periodic domain, visiting neighbors through
+/// the grid (`Neighborhood<'static, T>` last in both).
+macro_rules! per_neighborhood_kernels {
+    ($open:ident, $periodic:ident, $args:ident<$($a:ty),+>, $pass:ident<$($p:ty),+>) => {
+        per_index_kernel!(
+            $open,
+            $args<'static, $($a),+, Neighborhood<'static, Open>>,
+            $pass::<$($p),+, Neighborhood<'static, Open>>
+        );
+        per_index_kernel!(
+            $periodic,
+            $args<'static, $($a),+, Neighborhood<'static, Periodic>>,
+            $pass::<$($p),+, Neighborhood<'static, Periodic>>
+        );
+    };
+}
+
 per_index_kernel!(hash, HashArgs<'static>, hash_pass);
-per_topology_kernels!(density_f32, density_periodic_f32, DensityArgs<f32>, density_pass<f32, Poly6>);
-per_topology_kernels!(density_f64, density_periodic_f64, DensityArgs<f64>, density_pass<f64, Poly6>);
-per_topology_kernels!(density_spiky_f32, density_spiky_periodic_f32, DensityArgs<f32>, density_pass<f32, Spiky>);
-per_topology_kernels!(density_spiky_f64, density_spiky_periodic_f64, DensityArgs<f64>, density_pass<f64, Spiky>);
+per_neighborhood_kernels!(density_f32, density_periodic_f32, DensityArgs<f32>, density_pass<f32, Poly6>);
+per_neighborhood_kernels!(density_f64, density_periodic_f64, DensityArgs<f64>, density_pass<f64, Poly6>);
+per_neighborhood_kernels!(density_spiky_f32, density_spiky_periodic_f32, DensityArgs<f32>, density_pass<f32, Spiky>);
+per_neighborhood_kernels!(density_spiky_f64, density_spiky_periodic_f64, DensityArgs<f64>, density_pass<f64, Spiky>);
 per_topology_kernels!(mirrored_wall_f32, mirrored_wall_periodic_f32, MirroredWallArgs<f32>, mirrored_wall_pass<f32>);
 per_topology_kernels!(mirrored_wall_f64, mirrored_wall_periodic_f64, MirroredWallArgs<f64>, mirrored_wall_pass<f64>);
-per_topology_kernels!(
+per_neighborhood_kernels!(
     stress_newtonian_f32,
     stress_newtonian_periodic_f32,
     StressArgs<f32, Newtonian<f32>>,
     stress_pass<f32, Newtonian<f32>>
 );
-per_topology_kernels!(
+per_neighborhood_kernels!(
     stress_newtonian_f64,
     stress_newtonian_periodic_f64,
     StressArgs<f64, Newtonian<f64>>,
     stress_pass<f64, Newtonian<f64>>
 );
-per_topology_kernels!(stress_cross_f32, stress_cross_periodic_f32, StressArgs<f32, Cross<f32>>, stress_pass<f32, Cross<f32>>);
-per_topology_kernels!(stress_cross_f64, stress_cross_periodic_f64, StressArgs<f64, Cross<f64>>, stress_pass<f64, Cross<f64>>);
-per_topology_kernels!(
+per_neighborhood_kernels!(stress_cross_f32, stress_cross_periodic_f32, StressArgs<f32, Cross<f32>>, stress_pass<f32, Cross<f32>>);
+per_neighborhood_kernels!(stress_cross_f64, stress_cross_periodic_f64, StressArgs<f64, Cross<f64>>, stress_pass<f64, Cross<f64>>);
+per_neighborhood_kernels!(
     acceleration_stress_f32,
     acceleration_stress_periodic_f32,
     AccelerationArgs<f32, StressDivergence<'static, f32>>,
     acceleration_pass<f32, StressDivergence<'static, f32>>
 );
-per_topology_kernels!(
+per_neighborhood_kernels!(
     acceleration_stress_f64,
     acceleration_stress_periodic_f64,
     AccelerationArgs<f64, StressDivergence<'static, f64>>,
     acceleration_pass<f64, StressDivergence<'static, f64>>
 );
-per_topology_kernels!(
+per_neighborhood_kernels!(
     acceleration_laplacian_f32,
     acceleration_laplacian_periodic_f32,
     AccelerationArgs<f32, VelocityLaplacian<'static, f32>>,
     acceleration_pass<f32, VelocityLaplacian<'static, f32>>
 );
-per_topology_kernels!(
+per_neighborhood_kernels!(
     acceleration_laplacian_f64,
     acceleration_laplacian_periodic_f64,
     AccelerationArgs<f64, VelocityLaplacian<'static, f64>>,
     acceleration_pass<f64, VelocityLaplacian<'static, f64>>
 );
-per_topology_kernels!(
+per_neighborhood_kernels!(
     shear_viscosity_cross_f32,
     shear_viscosity_cross_periodic_f32,
     ShearViscosityArgs<f32, Cross<f32>>,
     shear_viscosity_pass<f32, Cross<f32>>
 );
-per_topology_kernels!(
+per_neighborhood_kernels!(
     shear_viscosity_cross_f64,
     shear_viscosity_cross_periodic_f64,
     ShearViscosityArgs<f64, Cross<f64>>,
     shear_viscosity_pass<f64, Cross<f64>>
 );
-per_topology_kernels!(
+per_neighborhood_kernels!(
     acceleration_morris_f32,
     acceleration_morris_periodic_f32,
     AccelerationArgs<f32, MorrisViscosity<'static, f32, Newtonian<f32>>>,
     acceleration_pass<f32, MorrisViscosity<'static, f32, Newtonian<f32>>>
 );
-per_topology_kernels!(
+per_neighborhood_kernels!(
     acceleration_morris_f64,
     acceleration_morris_periodic_f64,
     AccelerationArgs<f64, MorrisViscosity<'static, f64, Newtonian<f64>>>,
     acceleration_pass<f64, MorrisViscosity<'static, f64, Newtonian<f64>>>
 );
-per_topology_kernels!(
+per_neighborhood_kernels!(
     acceleration_morris_shear_f32,
     acceleration_morris_shear_periodic_f32,
     AccelerationArgs<f32, MorrisViscosity<'static, f32, View<'static, f32>>>,
     acceleration_pass<f32, MorrisViscosity<'static, f32, View<'static, f32>>>
 );
-per_topology_kernels!(
+per_neighborhood_kernels!(
     acceleration_morris_shear_f64,
     acceleration_morris_shear_periodic_f64,
     AccelerationArgs<f64, MorrisViscosity<'static, f64, View<'static, f64>>>,
     acceleration_pass<f64, MorrisViscosity<'static, f64, View<'static, f64>>>
 );
-per_topology_kernels!(
+per_neighborhood_kernels!(
     velocity_gradient_newtonian_f32,
     velocity_gradient_newtonian_periodic_f32,
     VelocityGradientArgs<f32, Newtonian<f32>>,
     velocity_gradient_pass<f32, Newtonian<f32>>
 );
-per_topology_kernels!(
+per_neighborhood_kernels!(
     velocity_gradient_newtonian_f64,
     velocity_gradient_newtonian_periodic_f64,
     VelocityGradientArgs<f64, Newtonian<f64>>,
     velocity_gradient_pass<f64, Newtonian<f64>>
 );
-per_topology_kernels!(
+per_neighborhood_kernels!(
     velocity_gradient_cross_f32,
     velocity_gradient_cross_periodic_f32,
     VelocityGradientArgs<f32, Cross<f32>>,
     velocity_gradient_pass<f32, Cross<f32>>
 );
-per_topology_kernels!(
+per_neighborhood_kernels!(
     velocity_gradient_cross_f64,
     velocity_gradient_cross_periodic_f64,
     VelocityGradientArgs<f64, Cross<f64>>,
     velocity_gradient_pass<f64, Cross<f64>>
 );
-per_topology_kernels!(
+per_neighborhood_kernels!(
     acceleration_hourglass_f32,
     acceleration_hourglass_periodic_f32,
     AccelerationArgs<f32, HourglassControlledStress<'static, f32>>,
     acceleration_pass<f32, HourglassControlledStress<'static, f32>>
 );
-per_topology_kernels!(
+per_neighborhood_kernels!(
     acceleration_hourglass_f64,
     acceleration_hourglass_periodic_f64,
     AccelerationArgs<f64, HourglassControlledStress<'static, f64>>,

@@ -1,10 +1,10 @@
 //! Velocity gradient, rate of deformation, shear rate and stress (Algorithm 1, lines 10-11).
 
-use crate::cell_grid::Neighborhood;
+use crate::cell_grid::{Neighborhood, Neighbors};
 use crate::cross_viscosity::Rheology;
 use crate::fluid::Fluid;
 use crate::real::Real;
-use crate::topology::{Open, Topology};
+use crate::topology::Open;
 use crate::vec3::{Mat3, SymTensor, Vec3};
 use crate::view::{SymTensorViewMut, Vec3View, View};
 
@@ -12,9 +12,9 @@ use crate::view::{SymTensorViewMut, Vec3View, View};
 /// (1/s), with `m[a][b] = d v_a / d x_b`. Zero, without the neighbor loop, away from fluid,
 /// where every term is zero.
 #[inline(always)]
-pub fn velocity_gradient<R: Real, T: Topology>(
+pub fn velocity_gradient<R: Real, N: Neighbors>(
     i: usize,
-    neighborhood: &Neighborhood<T>,
+    neighborhood: &N,
     velocity: &Vec3View<R>,
     density: &View<R>,
     fluid: &Fluid<R>,
@@ -55,8 +55,8 @@ pub fn stress<R: Real, Rh: Rheology<R>>(deformation: SymTensor<R>, density: R, r
 /// Arguments of the velocity-gradient-and-stress pass.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
-pub struct StressArgs<'a, R, Rh, T = Open> {
-    pub neighborhood: Neighborhood<'a, T>,
+pub struct StressArgs<'a, R, Rh, N = Neighborhood<'a, Open>> {
+    pub neighborhood: N,
     pub fluid: Fluid<R>,
     pub rheology: Rh,
     /// Velocity at the current full step (m/s).
@@ -67,7 +67,7 @@ pub struct StressArgs<'a, R, Rh, T = Open> {
 
 /// The stress pass for particle `i` (boundary particles included: Eq. (9) reads their stress).
 #[inline(always)]
-pub fn stress_pass<R: Real, Rh: Rheology<R>, T: Topology>(i: usize, a: &StressArgs<R, Rh, T>) {
+pub fn stress_pass<R: Real, Rh: Rheology<R>, N: Neighbors>(i: usize, a: &StressArgs<R, Rh, N>) {
     let grad = velocity_gradient(i, &a.neighborhood, &a.velocity, &a.density, &a.fluid);
     let tau = stress(rate_of_deformation(grad), a.density.at(i), &a.rheology);
     // SAFETY: invocation i owns entry i.
