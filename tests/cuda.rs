@@ -16,7 +16,7 @@ use coil::scene::Scene;
 use coil::setup::initial_particles;
 use coil::simulation::Simulation;
 use coil_kernels::acceleration::{AccelerationArgs, MorrisViscosity, StressDivergence, VelocityLaplacian};
-use coil_kernels::cell_grid::HashArgs;
+use coil_kernels::cell_grid::{HashArgs, Neighborhood};
 use coil_kernels::counting_sort::Counters;
 use coil_kernels::cross_viscosity::{Cross, Newtonian};
 use coil_kernels::density::DensityArgs;
@@ -67,23 +67,24 @@ type Count = View<'static, u32>;
 /// on one side only, or a changed signature, shows here without a GPU.
 #[test]
 fn ptx_entry_parameters_match_the_host_argument_layouts() {
-    /// The entries of the passes that loop over neighbors or wrap, in topology `T`.
+    /// The entries of the passes that loop over neighbors (through the grid, as on the device)
+    /// or wrap, in topology `T`.
     fn per_topology<R: Real, T: Topology>(expected: &mut Vec<(String, Vec<usize>)>) {
         let name = |stem: &str| [stem, T::NAME, R::NAME].iter().filter(|p| !p.is_empty()).copied().collect::<Vec<_>>().join("_");
         let count = size_of::<Count>();
         let mut add = |stem: &str, args: usize| expected.push((name(stem), vec![count, args]));
-        add("density", size_of::<DensityArgs<R, T>>());
-        add("density_spiky", size_of::<DensityArgs<R, T>>());
-        add("stress_newtonian", size_of::<StressArgs<R, Newtonian<R>, T>>());
-        add("stress_cross", size_of::<StressArgs<R, Cross<R>, T>>());
-        add("acceleration_stress", size_of::<AccelerationArgs<R, StressDivergence<R>, T>>());
-        add("acceleration_laplacian", size_of::<AccelerationArgs<R, VelocityLaplacian<R>, T>>());
-        add("shear_viscosity_cross", size_of::<ShearViscosityArgs<R, Cross<R>, T>>());
-        add("acceleration_morris", size_of::<AccelerationArgs<R, MorrisViscosity<R, Newtonian<R>>, T>>());
-        add("acceleration_morris_shear", size_of::<AccelerationArgs<R, MorrisViscosity<R, View<R>>, T>>());
-        add("velocity_gradient_newtonian", size_of::<VelocityGradientArgs<R, Newtonian<R>, T>>());
-        add("velocity_gradient_cross", size_of::<VelocityGradientArgs<R, Cross<R>, T>>());
-        add("acceleration_hourglass", size_of::<AccelerationArgs<R, HourglassControlledStress<R>, T>>());
+        add("density", size_of::<DensityArgs<R, Neighborhood<T>>>());
+        add("density_spiky", size_of::<DensityArgs<R, Neighborhood<T>>>());
+        add("stress_newtonian", size_of::<StressArgs<R, Newtonian<R>, Neighborhood<T>>>());
+        add("stress_cross", size_of::<StressArgs<R, Cross<R>, Neighborhood<T>>>());
+        add("acceleration_stress", size_of::<AccelerationArgs<R, StressDivergence<R>, Neighborhood<T>>>());
+        add("acceleration_laplacian", size_of::<AccelerationArgs<R, VelocityLaplacian<R>, Neighborhood<T>>>());
+        add("shear_viscosity_cross", size_of::<ShearViscosityArgs<R, Cross<R>, Neighborhood<T>>>());
+        add("acceleration_morris", size_of::<AccelerationArgs<R, MorrisViscosity<R, Newtonian<R>>, Neighborhood<T>>>());
+        add("acceleration_morris_shear", size_of::<AccelerationArgs<R, MorrisViscosity<R, View<R>>, Neighborhood<T>>>());
+        add("velocity_gradient_newtonian", size_of::<VelocityGradientArgs<R, Newtonian<R>, Neighborhood<T>>>());
+        add("velocity_gradient_cross", size_of::<VelocityGradientArgs<R, Cross<R>, Neighborhood<T>>>());
+        add("acceleration_hourglass", size_of::<AccelerationArgs<R, HourglassControlledStress<R>, Neighborhood<T>>>());
         add("mirrored_wall", size_of::<MirroredWallArgs<R, T>>());
         add("leapfrog", size_of::<LeapfrogArgs<R, T>>());
     }
