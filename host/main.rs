@@ -160,7 +160,7 @@ enum Command {
     /// binding case fails; the paper's operator below the resolution and on the Cross
     /// cases is shown for comparison.
     Validate {
-        /// Coarser resolutions and no jets: about 6.5 minutes on 2 cores, against about an hour.
+        /// Coarser resolutions and no jets: about 5 minutes on 2 cores, against most of an hour.
         #[arg(long)]
         quick: bool,
         /// Run only these groups of cases (comma-separated): poiseuille, cross, tank,
@@ -176,7 +176,7 @@ enum Command {
     /// the reference and the median wall time of each trial's repeats; writes tradeoff.md,
     /// tradeoff.csv and tradeoff.png (error against time, the Pareto front drawn).
     Tradeoff {
-        /// A few coarse trials (about 15 s a repeat) instead of the full sweep (about 7 minutes a
+        /// A few coarse trials (about 13 s a repeat) instead of the full sweep (at most 7 minutes a
         /// repeat, on 2 cores).
         #[arg(long)]
         quick: bool,
