@@ -136,17 +136,19 @@ impl<T: Topology> Neighbors for Neighborhood<'_, T> {
 }
 
 impl<T: Topology> Neighborhood<'_, T> {
-    /// x - x_j (m) for a point `x` and particle `j`: across a periodic face the nearest
-    /// image's, as each neighbor loop takes it.
+    /// x - x_j (m) and |x - x_j|^2 (m^2) for a point `x` and particle `j`, in f64: across a
+    /// periodic face the nearest image's. Every neighbor loop takes them from here, so the grid's
+    /// loops and the lists give the same bits.
     #[inline(always)]
-    pub fn offset(&self, x: [f64; 3], j: usize) -> [f64; 3] {
+    pub fn separation(&self, x: [f64; 3], j: usize) -> ([f64; 3], f64) {
         let d = [x[0] - self.position.x.at(j), x[1] - self.position.y.at(j), x[2] - self.position.z.at(j)];
-        if T::PERIODIC {
+        let d = if T::PERIODIC {
             let period = self.topology.periods();
             [minimum_image(d[0], period[0]), minimum_image(d[1], period[1]), minimum_image(d[2], period[2])]
         } else {
             d
-        }
+        };
+        (d, d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
     }
 
     /// Calls `f(j, x - x_j, |x - x_j|^2)` for every particle j with |x - x_j| < h around a point
@@ -181,11 +183,9 @@ impl<T: Topology> Neighborhood<'_, T> {
                 let end = self.cell_start.at(last + 1) as usize;
                 R::tally_candidates(end - start);
                 for j in start..end {
-                    let [dx, dy, dz] = self.offset(xi, j);
-                    let r2 = dx * dx + dy * dy + dz * dz;
+                    let (r_ij, r2) = self.separation(xi, j);
                     if r2 < h2_f64 {
-                        let r_ij = Vec3::new(R::from_f64(dx), R::from_f64(dy), R::from_f64(dz));
-                        f(j, r_ij, R::from_f64(r2));
+                        f(j, Vec3::from_f64(r_ij), R::from_f64(r2));
                     }
                 }
             }
@@ -217,11 +217,9 @@ impl<T: Topology> Neighborhood<'_, T> {
             let end = self.cell_start.at(self.grid.linear_index([x_hi, y, z]) as usize + 1) as usize;
             R::tally_candidates(end - start);
             for j in start..end {
-                let [dx, dy, dz] = self.offset(xi, j);
-                let r2 = dx * dx + dy * dy + dz * dz;
+                let (r_ij, r2) = self.separation(xi, j);
                 if r2 < h2_f64 {
-                    let r_ij = Vec3::new(R::from_f64(dx), R::from_f64(dy), R::from_f64(dz));
-                    f(j, r_ij, R::from_f64(r2));
+                    f(j, Vec3::from_f64(r_ij), R::from_f64(r2));
                 }
             }
         };

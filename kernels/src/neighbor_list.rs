@@ -69,9 +69,8 @@ impl<T: Topology> Neighbors for ListedNeighborhood<'_, T> {
         let xi = self.grid.position.at(i);
         for k in base + 1..=base + count {
             let j = self.list.at(k) as usize;
-            let [dx, dy, dz] = self.grid.offset(xi, j);
-            let r2 = dx * dx + dy * dy + dz * dz;
-            f(j, Vec3::new(R::from_f64(dx), R::from_f64(dy), R::from_f64(dz)), R::from_f64(r2));
+            let (r_ij, r2) = self.grid.separation(xi, j);
+            f(j, Vec3::from_f64(r_ij), R::from_f64(r2));
         }
     }
 

@@ -22,6 +22,11 @@ impl<R: Real> Vec3<R> {
     pub fn zero() -> Self {
         Self::new(R::ZERO, R::ZERO, R::ZERO)
     }
+    /// `d` rounded to `R`.
+    #[inline(always)]
+    pub fn from_f64(d: [f64; 3]) -> Self {
+        Self::new(R::from_f64(d[0]), R::from_f64(d[1]), R::from_f64(d[2]))
+    }
     #[inline(always)]
     pub fn dot(self, o: Self) -> R {
         self.x * o.x + self.y * o.y + self.z * o.z
