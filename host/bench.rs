@@ -206,11 +206,7 @@ struct Measure<'a> {
 impl WithModel for Measure<'_> {
     type Output = (Result<Measurement, String>, Option<Device>);
     fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
-        let mut sim = if self.gpu.is_some() {
-            Simulation::<R, M>::for_device(self.scene, self.initial, model)
-        } else {
-            Simulation::<R, M>::new(self.scene, self.initial, model)
-        };
+        let mut sim = Simulation::<R, M>::for_backend(self.scene, self.initial, model, self.gpu.is_some());
         let blank = Measurement {
             size: self.size,
             fluid: sim.fluid_count(),

@@ -391,11 +391,7 @@ struct Drive<'a> {
 impl WithModel for Drive<'_> {
     type Output = Result<Summary, RunError>;
     fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
-        let mut sim = if self.device.is_some() {
-            Simulation::<R, M>::for_device(self.scene, self.initial, model)
-        } else {
-            Simulation::<R, M>::new(self.scene, self.initial, model)
-        };
+        let mut sim = Simulation::<R, M>::for_backend(self.scene, self.initial, model, self.device.is_some());
         let tally = match self.checkpoint {
             None => None,
             Some(c) => {

@@ -102,17 +102,18 @@ pub struct Simulation<R: Real, M: Model<R>> {
 impl<R: Real, M: Model<R>> Simulation<R, M> {
     /// Sets up a run of `scene` with the particles `initial` on the CPU backend.
     pub fn new(scene: &Scene, initial: &InitialParticles, model: M) -> Self {
-        Self::set_up(scene, initial, model, true)
+        Self::for_backend(scene, initial, model, false)
     }
 
     /// Sets up a run for a device backend: the host keeps no neighbor lists, and its own
     /// passes (the setup's density, and the steps of an operation count, which counts the
     /// device's work) visit neighbors through the grid as the device does.
     pub fn for_device(scene: &Scene, initial: &InitialParticles, model: M) -> Self {
-        Self::set_up(scene, initial, model, false)
+        Self::for_backend(scene, initial, model, true)
     }
 
-    fn set_up(scene: &Scene, initial: &InitialParticles, model: M, neighbor_lists: bool) -> Self {
+    /// [`Self::for_device`] where `on_device`, else [`Self::new`].
+    pub fn for_backend(scene: &Scene, initial: &InitialParticles, model: M, on_device: bool) -> Self {
         let mat = &scene.material;
         let h = scene.support_radius();
         let s = mat.particle_spacing_m;
@@ -177,7 +178,7 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         if sim.wall_mirror.is_none() {
             sim.grid.track_fluid(fluid.boundary_count);
         }
-        if neighbor_lists {
+        if !on_device {
             sim.grid.keep_neighbor_lists();
         }
         sim.sort_and_density();
