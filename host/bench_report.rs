@@ -89,7 +89,7 @@ pub fn markdown(report: &BenchReport, options: &BenchOptions) -> String {
          CPU with a number type that counts them (`operation_count`): the physics, in the run's precision, plus \
          the neighbor candidates' distance filter, 8 f64 operations each in both precisions, in each of the \
          three neighbor passes. The arithmetic floor is those at the GPU's peak rates. The CPU backend filters \
-         once a step and its other two passes read the neighbor lists it recorded, so its achieved rate counts \
+         once a step, when it records the neighbor lists its three passes then read, so its achieved rate counts \
          the device's operations, not its own.\n"
     );
     let _ = writeln!(
