@@ -176,7 +176,7 @@ enum Command {
     /// the reference and the median wall time of each trial's repeats; writes tradeoff.md,
     /// tradeoff.csv and tradeoff.png (error against time, the Pareto front drawn).
     Tradeoff {
-        /// A few coarse trials (about 13 s a repeat) instead of the full sweep (at most 7 minutes a
+        /// A few coarse trials (about 13 s a repeat) instead of the full sweep (about 5 minutes a
         /// repeat, on 2 cores).
         #[arg(long)]
         quick: bool,
