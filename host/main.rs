@@ -160,7 +160,7 @@ enum Command {
     /// binding case fails; the paper's operator below the resolution and on the Cross
     /// cases is shown for comparison.
     Validate {
-        /// Coarser resolutions and no jets: about 5 minutes on 2 cores, against most of an hour.
+        /// Coarser resolutions and no jets: about 5 minutes on 2 cores, against about 40 minutes.
         #[arg(long)]
         quick: bool,
         /// Run only these groups of cases (comma-separated): poiseuille, cross, tank,
