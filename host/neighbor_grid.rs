@@ -101,7 +101,7 @@ impl NeighborGrid {
     /// Records the neighbors within `h2` (m^2) of the sorted particles at `position`, in
     /// topology `topology`, when the grid keeps lists.
     pub fn record_neighbors<R: Real, T: Topology>(&mut self, position: Vec3View<f64>, h2: R, topology: T) {
-        if self.neighbor_list.is_empty() {
+        if !self.keeps_neighbor_lists() {
             return;
         }
         let n = position.x.len();

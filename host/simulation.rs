@@ -271,8 +271,9 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
     fn density<T: Topology>(&mut self, topology: T) {
         let p = &mut self.particles;
         let n = p.len();
-        self.grid.record_neighbors(vec3_view(&p.position, n), self.fluid.kernels.h2, topology);
-        let (grid, position) = (&self.grid, vec3_view(&p.position, n));
+        let position = vec3_view(&p.position, n);
+        self.grid.record_neighbors(position, self.fluid.kernels.h2, topology);
+        let grid = &self.grid;
         let density = view_mut(&mut p.density, n);
         if grid.keeps_neighbor_lists() {
             let neighborhood = grid.listed_neighborhood(position, topology);
