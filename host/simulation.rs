@@ -135,7 +135,7 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             sound_speed2: R::from_f64(mat.sound_speed_m_s * mat.sound_speed_m_s),
             pressure_floor: R::from_f64(if mat.clamp_negative_pressure { 0.0 } else { f64::NEG_INFINITY }),
             pressure_pair_weight: R::from_f64(mat.pressure_gradient.pair_weight()),
-            gravity: Vec3::new(R::from_f64(g[0]), R::from_f64(g[1]), R::from_f64(g[2])),
+            gravity: Vec3::from_f64(g),
             kernels: calibrated_kernels(mat.rest_density_kg_m3, s, h, mat.density_kernel),
             boundary_count: boundary_count as u32,
         };

@@ -134,7 +134,7 @@ pub fn mirrored_wall_pass<R: Real, T: Topology>(i: usize, a: &MirroredWallArgs<R
     let x = a.neighborhood.position.at(i);
     let f = fluid_at(mirror, &a.neighborhood, &a.id, &a.velocity, &a.density, &a.fluid);
     // Hydrostatics from the mirror image down to the wall particle: p += rho0 g · (x - mirror).
-    let below = Vec3::new(R::from_f64(x[0] - mirror[0]), R::from_f64(x[1] - mirror[1]), R::from_f64(x[2] - mirror[2]));
+    let below = Vec3::from_f64([x[0] - mirror[0], x[1] - mirror[1], x[2] - mirror[2]]);
     let p = f.pressure + a.fluid.rest_density * a.fluid.gravity.dot(below);
     let v = -f.velocity;
     // SAFETY: invocation i owns entry i, a wall entry; the entries it reads are fluid ones,
