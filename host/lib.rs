@@ -10,6 +10,7 @@ pub mod frame;
 pub mod image;
 pub mod inlet;
 pub mod interrupt;
+pub mod jet_axis;
 pub mod model;
 pub mod neighbor_grid;
 pub mod operation_count;

@@ -4,6 +4,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use coil::bench::{bench, cuda_available, precision_name, table_row, BenchBackend, BenchOptions};
 use coil::bench_report::{chart, csv, kernels_csv, markdown};
 use coil::check::check;
+use coil::jet_axis::{offsets_in_run, AxisSample, JetAxis};
 use coil::output::vtu_read::read_frame;
 use coil::output::write_atomically;
 use coil::preview::{frame_path, render_frame, Coloring, View};
@@ -187,6 +188,14 @@ enum Command {
         #[arg(long, default_value = "out/tradeoff")]
         out: PathBuf,
     },
+    /// Measure in a run's frames how far a jet swings: the offset over D, frame by frame, of its
+    /// axis just above the plate (the centroid of the downward flux between D/2 and 3D/2 above
+    /// it) from the nozzle's axis, as `coil validate` judges buckling (above 0.5 D) and a straight
+    /// jet (below 0.1 D). For a run of one round, still, downward inlet, written as .vtu frames.
+    Axis {
+        /// The run's output folder (it holds run.json and the .pvd series).
+        dir: PathBuf,
+    },
     /// List the shipped scenes, one line each, with what each reproduces.
     Scenes {
         /// Folder of scene files.
@@ -267,6 +276,16 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Scenes { dir } => list_scenes(&dir),
+        Command::Axis { dir } => match offsets_in_run(&dir) {
+            Ok((axis, offsets)) => {
+                print_axis(&dir, &axis, &offsets);
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        },
         Command::Tradeoff { quick, repeats, out } => match tradeoff_command(quick, repeats as usize, &out) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
@@ -399,6 +418,33 @@ fn main() -> ExitCode {
             let options = ResumeOptions { backend: backend.backend(), quiet, preview, set, stop: Some(coil::interrupt::watch()) };
             finish_run(resume(&dir, &options), &dir)
         }
+    }
+}
+
+/// Prints the axis offset at each frame's time and the largest; frames where nothing fell
+/// through the slab read "-".
+fn print_axis(dir: &Path, axis: &JetAxis, offsets: &[AxisSample]) {
+    let d = axis.diameter_m;
+    println!(
+        "{}: jet axis offset over D = {d} m, from the nozzle axis x = {} m, z = {} m, of the downward flux {} to {} m above the plate at y = {} m",
+        dir.display(),
+        axis.nozzle_xz_m[0],
+        axis.nozzle_xz_m[1],
+        0.5 * d,
+        1.5 * d,
+        axis.plate_y_m
+    );
+    println!("t (s)      offset / D");
+    for &AxisSample { time_s: t, offset_over_d } in offsets {
+        match offset_over_d {
+            Some(o) => println!("{t:<10.6} {o:.6}"),
+            None => println!("{t:<10.6} -"),
+        }
+    }
+    let largest = offsets.iter().filter_map(|s| s.offset_over_d.map(|o| (s.time_s, o))).max_by(|a, b| a.1.total_cmp(&b.1));
+    match largest {
+        Some((t, o)) => println!("largest: {o:.4} D at t = {t:.6} s (straight below 0.1 D, buckled above 0.5 D)"),
+        None => println!("largest: none; no frame has fluid falling through the slab"),
     }
 }
 

@@ -131,39 +131,152 @@ fn the_taylor_green_vortex_decays_at_the_exact_rate() {
 }
 
 /// The jet's axis offset reads where the fluid falls through the slab D/2 to 3D/2 above the
-/// plate: a rope displaced by 0.6 D there reads 0.6 D whatever lies above or below it and
-/// whatever pile at rest or rising fluid surrounds it (the fluid's centroid would read 0.3 D),
-/// a pile alone reads nothing, and so does an empty slab.
+/// plate, from the nozzle's axis: a rope displaced by 0.6 D there reads 0.6 D whatever lies
+/// above or below it and whatever pile at rest or rising fluid surrounds it (the fluid's
+/// centroid would read 0.3 D), a pile alone reads nothing, and so does an empty slab. The
+/// nozzle and the plate are placed off the origin, so that the slab and the distance must be
+/// taken from them.
 #[test]
 fn the_jet_axis_offset_reads_where_the_fluid_falls_just_above_the_plate() {
-    use coil::validation::jet::axis_offset;
-    use coil::validation::snapshot::Snapshot;
+    use coil::jet_axis::JetAxis;
     let d = 0.02;
-    let mut jet = Snapshot::default();
+    let (x0, y0, z0) = (0.013, -0.007, -0.021);
+    let axis = JetAxis { nozzle_xz_m: [x0, z0], plate_y_m: y0, diameter_m: d };
+    let mut jet = Vec::new();
     for k in 0..20 {
         let y = 0.005 * k as f64;
         // Displaced by 0.6 D along x inside the slab and by 3 D elsewhere.
         let x = if (0.5 * d..1.5 * d).contains(&y) { 0.6 * d } else { 3.0 * d };
-        jet.position.extend([[x - 0.001, y, 0.0], [x + 0.001, y, 0.0]]);
-        jet.velocity.extend([[0.0, -0.6, 0.0], [0.1, -0.6, 0.05]]);
+        jet.extend([([x0 + x - 0.001, y0 + y, z0], -0.6), ([x0 + x + 0.001, y0 + y, z0], -0.6)]);
     }
-    let mut pile = Snapshot::default();
-    for (x, z) in [(0.03, 0.0), (-0.03, 0.0), (0.0, 0.03), (0.0, -0.03), (0.0, 0.0)] {
-        pile.position.push([x, 0.015, z]);
-        pile.velocity.push([0.02, 0.0, -0.01]);
-    }
+    let mut pile: Vec<([f64; 3], f64)> = [(0.03, 0.0), (-0.03, 0.0), (0.0, 0.03), (0.0, -0.03), (0.0, 0.0)]
+        .map(|(x, z)| ([x0 + x, y0 + 0.015, z0 + z], 0.0))
+        .into();
     // Fluid welling up beside the rope.
-    pile.position.push([-0.5 * d, 0.02, 0.0]);
-    pile.velocity.push([0.0, 0.3, 0.0]);
-    assert_eq!(axis_offset(&pile, 0.0, d), None);
-    let mut both = jet.clone();
-    both.position.extend(&pile.position);
-    both.velocity.extend(&pile.velocity);
-    for snapshot in [&jet, &both] {
-        let offset = axis_offset(snapshot, 0.0, d).expect("fluid falls through the slab");
+    pile.push(([x0 - 0.5 * d, y0 + 0.02, z0], 0.3));
+    assert_eq!(axis.offset(pile.iter().copied()), None);
+    let both = jet.iter().chain(&pile).copied();
+    for offset in [axis.offset(jet.iter().copied()), axis.offset(both)] {
+        let offset = offset.expect("fluid falls through the slab");
         assert!((offset - 0.6 * d).abs() < 1e-12, "{offset}");
     }
-    assert_eq!(axis_offset(&Snapshot::default(), 0.0, d), None);
+    assert_eq!(axis.offset(std::iter::empty()), None);
+}
+
+/// A jet's axis is its nozzle's x and z and the highest plate top or box floor below the
+/// nozzle (a lid above it is not the plate); a jet without one axis is refused, naming the
+/// field.
+#[test]
+fn the_jet_axis_is_taken_from_the_nozzle_and_the_surface_below_it() {
+    use coil::jet_axis::JetAxis;
+    use coil::scene::{Boundary, Nozzle, NozzleMotion, Scene};
+    let mut jet = Scene::load_with(std::path::Path::new("scenes/newtonian_jet.toml"), &[]).expect("shipped scene");
+    jet.inlets[0].position_m = [0.013, 0.1, -0.021];
+    jet.boundaries = vec![
+        Boundary::Box { min_m: [-0.06, -0.01, -0.06], max_m: [0.06, 0.2, 0.06], open_top: false },
+        Boundary::Plate { height_m: 0.004, min_xz_m: None, max_xz_m: None },
+        Boundary::Plate { height_m: 0.15, min_xz_m: None, max_xz_m: None },
+    ];
+    let axis = JetAxis::of(&jet, "jet.toml").expect("a round jet falling onto a plate");
+    assert_eq!(axis, JetAxis { nozzle_xz_m: [0.013, -0.021], plate_y_m: 0.004, diameter_m: 0.02 });
+    let refused = |change: &dyn Fn(&mut Scene)| {
+        let mut scene = jet.clone();
+        change(&mut scene);
+        let e = JetAxis::of(&scene, "jet.toml").expect_err("no axis");
+        format!("{}: {}", e.file, e.field)
+    };
+    assert_eq!(
+        refused(&|s| s.inlets[0].nozzle = Nozzle::Rectangle { width_m: 0.02, depth_m: 0.01 }),
+        "jet.toml: inlet[0].nozzle"
+    );
+    assert_eq!(refused(&|s| s.inlets[0].direction = [0.6, -0.8, 0.0]), "jet.toml: inlet[0].direction");
+    assert_eq!(refused(&|s| s.inlets[0].direction = [0.0, 1.0, 0.0]), "jet.toml: inlet[0].direction");
+    assert_eq!(
+        refused(&|s| s.inlets[0].motion = Some(NozzleMotion::Velocity { velocity_m_s: [0.1, 0.0, 0.0] })),
+        "jet.toml: inlet[0].motion"
+    );
+    assert_eq!(refused(&|s| s.inlets.push(s.inlets[0].clone())), "jet.toml: inlet");
+    assert_eq!(refused(&|s| s.inlets.clear()), "jet.toml: inlet");
+    assert_eq!(refused(&|s| s.boundaries.truncate(0)), "jet.toml: boundary");
+}
+
+/// `coil axis` reads a run's frames and finds in them what `coil validate` measures as the jet
+/// runs: the shipped jet from H/D = 3 to 0.1 s, every 0.02 s. A run writes each frame at the
+/// first step at or past its time, up to one step (8 us) late, where validate shortens that
+/// step to land on it; the axis moves at most a few D/s (the largest swing, 0.1 D in 0.02 s,
+/// is 5 D/s), so the two may differ by 5 D/s x 8 us = 4e-5 D, plus the six decimals printed:
+/// 1e-4 D is allowed (measured: 6e-6). A scene whose jet has no axis to measure is refused with
+/// its file, field and reason.
+#[test]
+fn coil_axis_measures_in_the_frames_what_validate_measures_as_the_jet_runs() {
+    use coil::validation::jet::axis_offsets;
+    let expected = axis_offsets(3.0, ViscosityOperator::Stress, 0.0, 0.1).expect("stable");
+    let out = std::env::temp_dir().join(format!("coil-axis-{}", std::process::id()));
+    let out_arg = out.to_str().expect("utf-8 path");
+    let run = common::coil(&[
+        "run",
+        "scenes/newtonian_jet.toml",
+        "--backend",
+        "cpu",
+        "--quiet",
+        "--out",
+        out_arg,
+        "--set",
+        "inlet[0].position_m=[0.0,0.06,0.0]",
+        "--set",
+        "domain.max_m=[0.07,0.09,0.07]",
+        "--set",
+        "simulation.end_time_s=0.1",
+    ]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let axis = common::coil(&["axis", out_arg]);
+    assert!(axis.status.success(), "{}", String::from_utf8_lossy(&axis.stderr));
+    let printed = String::from_utf8_lossy(&axis.stdout);
+    let measured: Vec<[f64; 2]> = printed
+        .lines()
+        .filter_map(|l| {
+            let mut words = l.split_whitespace().map(str::parse::<f64>);
+            match (words.next(), words.next()) {
+                (Some(Ok(t)), Some(Ok(o))) => Some([t, o]),
+                _ => None,
+            }
+        })
+        .collect();
+    assert!(expected.len() >= 3, "fluid must reach the slab by 0.06 s: {expected:?}");
+    assert_eq!(measured.len(), expected.len(), "{printed}\nagainst {expected:?}");
+    for (m, e) in measured.iter().zip(&expected) {
+        assert!((m[0] - e[0]).abs() < 1e-5 && (m[1] - e[1]).abs() <= 1e-4, "{printed}\nagainst {expected:?}");
+    }
+    let largest = expected.iter().map(|p| p[1]).fold(0.0, f64::max);
+    let printed_largest: f64 = printed
+        .lines()
+        .find_map(|l| l.strip_prefix("largest: "))
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|o| o.parse().ok())
+        .unwrap_or_else(|| panic!("no largest offset in {printed}"));
+    assert!((printed_largest - largest).abs() <= 1e-4, "{printed}\nagainst {largest}");
+
+    let moving = out.with_extension("moving");
+    let run = common::coil(&[
+        "run",
+        "scenes/newtonian_jet.toml",
+        "--backend",
+        "cpu",
+        "--quiet",
+        "--out",
+        moving.to_str().expect("utf-8 path"),
+        "--set",
+        "inlet[0].motion={ velocity_m_s = [0.1, 0.0, 0.0] }",
+        "--set",
+        "simulation.end_time_s=0.02",
+    ]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let refused = common::coil(&["axis", moving.to_str().expect("utf-8 path")]);
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("run.json: inlet[0].motion: the nozzle moves"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&out);
+    let _ = std::fs::remove_dir_all(&moving);
 }
 
 /// `coil tradeoff --quick` writes its table, CSV and plot; of its knobs the paper's walls must

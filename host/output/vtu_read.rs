@@ -1,6 +1,6 @@
 //! Reads back the `.vtu` frames that `vtu::encode` writes (appended raw binary, UInt64 block
-//! headers), for `coil preview` and the round-trip test. Other VTK writers' files are refused
-//! with a reason rather than misread.
+//! headers) and the `.pvd` series that lists them, for `coil preview`, `coil axis` and the
+//! round-trip test. Other VTK writers' files are refused with a reason rather than misread.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -34,6 +34,22 @@ fn attribute(tag: &str, name: &str) -> Option<String> {
 pub fn read_frame(path: &Path) -> Result<FrameData, String> {
     let bytes = std::fs::read(path).map_err(|e| format!("{}: cannot be read: {e}", path.display()))?;
     parse(&bytes).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// The frames a `.pvd` series lists, in its order: (simulated time (s), file name relative to
+/// the series).
+pub fn read_series(path: &Path) -> Result<Vec<(f64, String)>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: cannot be read: {e}", path.display()))?;
+    text.split("<DataSet")
+        .skip(1)
+        .map(|tag| {
+            let tag = &tag[..tag.find('>').unwrap_or(tag.len())];
+            let time = attribute(tag, "timestep").and_then(|t| t.parse().ok()).ok_or("a DataSet without a numeric timestep")?;
+            let file = attribute(tag, "file").ok_or("a DataSet without a file")?;
+            Ok((time, file))
+        })
+        .collect::<Result<_, &str>>()
+        .map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// Parses the bytes of a frame file.
