@@ -5,7 +5,7 @@
 //! way.
 
 use crate::output::vtu_read::{read_frame, read_series};
-use crate::scene::{Boundary, Nozzle, Scene, SceneError};
+use crate::scene::{Boundary, FrameFormat, Nozzle, Scene, SceneError};
 use std::path::Path;
 
 /// Where a vertical round jet falls: its nozzle axis and the surface it lands on.
@@ -93,8 +93,10 @@ pub fn offsets_in_run(dir: &Path) -> Result<(JetAxis, Vec<AxisSample>), String> 
     let log = dir.join("run.json");
     let scene = Scene::load_with(&log, &[]).map_err(|e| e.to_string())?;
     let axis = JetAxis::of(&scene, &log.display().to_string()).map_err(|e| e.to_string())?;
-    let series = dir.join(format!("{}.pvd", scene.name));
-    let frames = read_series(&series).map_err(|e| format!("{e} (the offset is read from .vtu frames)"))?;
+    if !scene.output.formats.contains(&FrameFormat::Vtu) {
+        return Err(format!("{}: output.formats: the run wrote no .vtu frames, which the offset is read from", log.display()));
+    }
+    let frames = read_series(&dir.join(format!("{}.pvd", scene.name)))?;
     let mut offsets = Vec::with_capacity(frames.len());
     for (t, file) in frames {
         let path = dir.join(&file);

@@ -256,27 +256,23 @@ fn coil_axis_measures_in_the_frames_what_validate_measures_as_the_jet_runs() {
         .unwrap_or_else(|| panic!("no largest offset in {printed}"));
     assert!((printed_largest - largest).abs() <= 1e-4, "{printed}\nagainst {largest}");
 
-    let moving = out.with_extension("moving");
-    let run = common::coil(&[
-        "run",
-        "scenes/newtonian_jet.toml",
-        "--backend",
-        "cpu",
-        "--quiet",
-        "--out",
-        moving.to_str().expect("utf-8 path"),
-        "--set",
-        "inlet[0].motion={ velocity_m_s = [0.1, 0.0, 0.0] }",
-        "--set",
-        "simulation.end_time_s=0.02",
-    ]);
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    let refused = common::coil(&["axis", moving.to_str().expect("utf-8 path")]);
-    let stderr = String::from_utf8_lossy(&refused.stderr);
-    assert_eq!(refused.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("run.json: inlet[0].motion: the nozzle moves"), "{stderr}");
+    // Runs the axis cannot be read from: a moving nozzle, and frames written as PLY only.
+    for (name, set, reason) in [
+        ("moving", "inlet[0].motion={ velocity_m_s = [0.1, 0.0, 0.0] }", "run.json: inlet[0].motion: the nozzle moves"),
+        ("ply", "output.formats=[\"ply\"]", "run.json: output.formats: the run wrote no .vtu frames"),
+    ] {
+        let dir = out.with_extension(name);
+        let dir_arg = dir.to_str().expect("utf-8 path");
+        let args = ["run", "scenes/newtonian_jet.toml", "--backend", "cpu", "--quiet", "--out", dir_arg];
+        let run = common::coil(&[&args[..], &["--set", set, "--set", "simulation.end_time_s=0.02"]].concat());
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        let refused = common::coil(&["axis", dir_arg]);
+        let stderr = String::from_utf8_lossy(&refused.stderr);
+        assert_eq!(refused.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(reason), "{stderr}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
     let _ = std::fs::remove_dir_all(&out);
-    let _ = std::fs::remove_dir_all(&moving);
 }
 
 /// `coil tradeoff --quick` writes its table, CSV and plot; of its knobs the paper's walls must
