@@ -13,7 +13,8 @@ use std::path::Path;
 pub struct JetAxis {
     /// x and z of the nozzle's axis (m).
     pub nozzle_xz_m: [f64; 2],
-    /// Height of the surface under the nozzle (m): the highest plate top or box floor below it.
+    /// Height of the surface under the nozzle (m): the highest plate top or box floor below it
+    /// that spans its axis.
     pub plate_y_m: f64,
     /// Nozzle diameter D (m).
     pub diameter_m: f64,
@@ -21,7 +22,7 @@ pub struct JetAxis {
 
 impl JetAxis {
     /// The axis of the scene's only inlet, which must be round, still and point straight down
-    /// onto a plate or a box floor. Errors name `file` and the field.
+    /// onto a plate or a box floor that spans its axis. Errors name `file` and the field.
     pub fn of(scene: &Scene, file: &str) -> Result<JetAxis, SceneError> {
         let bad = |field: &str, reason: String| SceneError { file: file.into(), field: field.into(), reason };
         let [inlet] = scene.inlets.as_slice() else {
@@ -45,14 +46,19 @@ impl JetAxis {
         let plate_y_m = scene
             .boundaries
             .iter()
-            .map(|b| match *b {
-                Boundary::Plate { height_m, .. } => height_m,
-                Boundary::Box { min_m, .. } => min_m[1],
+            .filter_map(|b| {
+                let ([x0, z0], [x1, z1], top) = match *b {
+                    Boundary::Plate { height_m, min_xz_m, max_xz_m } => {
+                        (min_xz_m.unwrap_or([f64::MIN, f64::MIN]), max_xz_m.unwrap_or([f64::MAX, f64::MAX]), height_m)
+                    }
+                    Boundary::Box { min_m, max_m, .. } => ([min_m[0], min_m[2]], [max_m[0], max_m[2]], min_m[1]),
+                };
+                (x0 <= x && x <= x1 && z0 <= z && z <= z1).then_some(top)
             })
             .filter(|&y| y < nozzle_y)
             .fold(f64::NEG_INFINITY, f64::max);
         if plate_y_m == f64::NEG_INFINITY {
-            return Err(bad("boundary", "the jet falls onto no plate or box floor below its nozzle".into()));
+            return Err(bad("boundary", "the jet falls onto no plate or box floor under its nozzle".into()));
         }
         Ok(JetAxis { nozzle_xz_m: [x, z], plate_y_m, diameter_m: 2.0 * radius_m })
     }

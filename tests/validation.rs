@@ -164,8 +164,8 @@ fn the_jet_axis_offset_reads_where_the_fluid_falls_just_above_the_plate() {
 }
 
 /// A jet's axis is its nozzle's x and z and the highest plate top or box floor below the
-/// nozzle (a lid above it is not the plate); a jet without one axis is refused, naming the
-/// field.
+/// nozzle that spans its axis (a lid above it, or a higher plate beside it, is not the plate);
+/// a jet without one axis is refused, naming the field.
 #[test]
 fn the_jet_axis_is_taken_from_the_nozzle_and_the_surface_below_it() {
     use coil::jet_axis::JetAxis;
@@ -176,6 +176,7 @@ fn the_jet_axis_is_taken_from_the_nozzle_and_the_surface_below_it() {
         Boundary::Box { min_m: [-0.06, -0.01, -0.06], max_m: [0.06, 0.2, 0.06], open_top: false },
         Boundary::Plate { height_m: 0.004, min_xz_m: None, max_xz_m: None },
         Boundary::Plate { height_m: 0.15, min_xz_m: None, max_xz_m: None },
+        Boundary::Plate { height_m: 0.05, min_xz_m: Some([0.02, -0.05]), max_xz_m: Some([0.05, 0.05]) },
     ];
     let axis = JetAxis::of(&jet, "jet.toml").expect("a round jet falling onto a plate");
     assert_eq!(axis, JetAxis { nozzle_xz_m: [0.013, -0.021], plate_y_m: 0.004, diameter_m: 0.02 });
