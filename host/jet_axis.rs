@@ -4,6 +4,7 @@
 //! in the frames of any finished run, so that a jet run with other parameters is judged the same
 //! way.
 
+use crate::output::vtu::series_path;
 use crate::output::vtu_read::{read_frame, read_series};
 use crate::scene::{Boundary, FrameFormat, Nozzle, Scene, SceneError};
 use std::path::Path;
@@ -102,7 +103,7 @@ pub fn offsets_in_run(dir: &Path) -> Result<(JetAxis, Vec<AxisSample>), String> 
     if !scene.output.formats.contains(&FrameFormat::Vtu) {
         return Err(format!("{}: output.formats: the run wrote no .vtu frames, which the offset is read from", log.display()));
     }
-    let frames = read_series(&dir.join(format!("{}.pvd", scene.name)))?;
+    let frames = read_series(&series_path(dir, &scene.name))?;
     let mut offsets = Vec::with_capacity(frames.len());
     for (t, file) in frames {
         let path = dir.join(&file);

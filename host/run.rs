@@ -4,7 +4,7 @@
 use crate::checkpoint::{self, Checkpoint};
 use crate::frame::Frame;
 use crate::model::{with_precision_and_model, Model, WithModel};
-use crate::output::vtu::{encode, Field, Series};
+use crate::output::vtu::{encode, series_path, Field, Series};
 use crate::output::write_atomically;
 use crate::parallel::on_worker;
 use crate::preview::{own_range, render, speeds, Coloring, View};
@@ -596,7 +596,7 @@ fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
     let earlier_wall_s = tally.wall_s;
     let expected_frames = every_s.map(|e| (end / e).ceil() as usize + 1).unwrap_or(1024);
     let writes_series = scene.output.formats.contains(&FrameFormat::Vtu);
-    let series_path = dir.join(format!("{}.pvd", scene.name));
+    let series_path = series_path(dir, &scene.name);
     let listed =
         if writes_series { tally.frame_times.iter().enumerate().map(|(k, &t)| (t, frame_name(k))).collect() } else { Vec::new() };
     let mut series = Series::new(series_path.clone(), expected_frames, listed);

@@ -74,6 +74,11 @@ pub fn encode(positions: &[[f64; 3]], fields: &[Field], bytes: &mut Vec<u8>) {
     bytes.extend_from_slice(b"\n  </AppendedData>\n</VTKFile>\n");
 }
 
+/// The `.pvd` series of a run of scene `scene_name` in output folder `dir`.
+pub fn series_path(dir: &Path, scene_name: &str) -> PathBuf {
+    dir.join(format!("{scene_name}.pvd"))
+}
+
 /// A `.pvd` collection listing every frame written so far.
 pub struct Series {
     path: PathBuf,
