@@ -1,6 +1,7 @@
 //! Ctrl-C (SIGINT) or SIGTERM during `coil run`: the run stops after the step it is in, logs
 //! itself as "interrupted" with its summary, and keeps every frame it wrote. A second signal
-//! ends the process at once, as if nothing had been installed.
+//! ends the process at once, as if nothing had been installed. A closed pipe on stdout
+//! (`coil scenes | head`) ends the process quietly, as it does any Unix filter.
 
 use std::sync::atomic::AtomicBool;
 #[cfg(unix)]
@@ -25,4 +26,14 @@ pub fn watch() -> &'static AtomicBool {
         }
     }
     &REQUESTED
+}
+
+/// Restores SIGPIPE's default, which Rust's runtime ignores: otherwise the first `println!`
+/// after the reader of a pipe has gone panics ("failed printing to stdout").
+pub fn end_on_closed_pipe() {
+    #[cfg(unix)]
+    // SAFETY: called first in main, before any other thread exists; SIG_DFL installs no handler.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
 }

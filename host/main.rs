@@ -272,93 +272,72 @@ fn load_scene(path: &Path, set: &[String]) -> Result<Scene, String> {
     Scene::load_with(path, &overrides).map_err(|e| e.to_string())
 }
 
+/// Every command's bad input ends here: one `error:` line and exit code 2.
 fn main() -> ExitCode {
-    let cli = Cli::parse();
-    match cli.command {
+    coil::interrupt::end_on_closed_pipe();
+    match command(Cli::parse().command) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn command(command: Command) -> Result<ExitCode, String> {
+    match command {
         Command::Scenes { dir } => list_scenes(&dir),
-        Command::Axis { dir } => match offsets_in_run(&dir) {
-            Ok((axis, offsets)) => {
-                print_axis(&dir, &axis, &offsets);
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::from(2)
-            }
-        },
-        Command::Tradeoff { quick, repeats, out } => match tradeoff_command(quick, repeats as usize, &out) {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::from(2)
-            }
-        },
-        Command::Validate { quick, only, out } => match validate_command(quick, &only, &out) {
-            Ok(true) => ExitCode::SUCCESS,
-            Ok(false) => ExitCode::from(1),
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::from(2)
-            }
-        },
+        Command::Axis { dir } => {
+            let (axis, offsets) = offsets_in_run(&dir)?;
+            print_axis(&dir, &axis, &offsets);
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Tradeoff { quick, repeats, out } => tradeoff_command(quick, repeats as usize, &out).map(|()| ExitCode::SUCCESS),
+        Command::Validate { quick, only, out } => {
+            Ok(if validate_command(quick, &only, &out)? { ExitCode::SUCCESS } else { ExitCode::from(1) })
+        }
         Command::Bench { sizes, precision, backend, steps, cpu_large_steps, warmup, profile_steps, threads, out } => {
-            let options = set_threads(threads).and_then(|()| {
-                let sizes = sizes
-                    .iter()
-                    .map(|s| {
-                        table_row(s)
-                            .ok_or_else(|| format!("--sizes: `{s}` is not a size of Table I (1K,4K,16K,64K,128K,256K,1M)"))
-                    })
-                    .collect::<Result<Vec<_>, _>>()?;
-                if steps == 0 || cpu_large_steps == 0 {
-                    return Err("--steps and --cpu-large-steps: must be at least 1".to_string());
-                }
-                let backends = match backend {
-                    BenchBackendArg::Cpu => vec![BenchBackend::Cpu],
-                    BenchBackendArg::Cuda => vec![BenchBackend::Cuda],
-                    BenchBackendArg::Both => vec![BenchBackend::Cpu, BenchBackend::Cuda],
-                    BenchBackendArg::Auto => match cuda_available() {
-                        Ok(()) => vec![BenchBackend::Cpu, BenchBackend::Cuda],
-                        Err(why) => {
-                            eprintln!("backend: cpu only ({why})");
-                            vec![BenchBackend::Cpu]
-                        }
-                    },
-                };
-                Ok(BenchOptions {
-                    sizes,
-                    precisions: precision.iter().map(|p| p.precision()).collect(),
-                    backends,
-                    steps,
-                    cpu_large_steps,
-                    warmup,
-                    profile_steps,
+            set_threads(threads)?;
+            let sizes = sizes
+                .iter()
+                .map(|s| {
+                    table_row(s).ok_or_else(|| format!("--sizes: `{s}` is not a size of Table I (1K,4K,16K,64K,128K,256K,1M)"))
                 })
-            });
-            match options.and_then(|o| bench_command(&o, &out)) {
-                Ok(()) => ExitCode::SUCCESS,
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::from(2)
-                }
+                .collect::<Result<Vec<_>, _>>()?;
+            if steps == 0 || cpu_large_steps == 0 {
+                return Err("--steps and --cpu-large-steps: must be at least 1".to_string());
             }
+            let backends = match backend {
+                BenchBackendArg::Cpu => vec![BenchBackend::Cpu],
+                BenchBackendArg::Cuda => vec![BenchBackend::Cuda],
+                BenchBackendArg::Both => vec![BenchBackend::Cpu, BenchBackend::Cuda],
+                BenchBackendArg::Auto => match cuda_available() {
+                    Ok(()) => vec![BenchBackend::Cpu, BenchBackend::Cuda],
+                    Err(why) => {
+                        eprintln!("backend: cpu only ({why})");
+                        vec![BenchBackend::Cpu]
+                    }
+                },
+            };
+            let options = BenchOptions {
+                sizes,
+                precisions: precision.iter().map(|p| p.precision()).collect(),
+                backends,
+                steps,
+                cpu_large_steps,
+                warmup,
+                profile_steps,
+            };
+            bench_command(&options, &out).map(|()| ExitCode::SUCCESS)
         }
         Command::Check { scene, set, precision, threads, calibrate_s } => {
             let file = scene.display().to_string();
-            let report = set_threads(threads).and_then(|()| load_scene(&scene, &set)).and_then(|parsed| {
-                let calibration = std::time::Duration::from_secs_f64(calibrate_s.clamp(0.0, 600.0));
-                check(&parsed, &file, precision.map(PrecisionArg::precision), calibration).map_err(|e| e.to_string())
-            });
-            match report {
-                Ok(r) => {
-                    println!("{file}: valid\n{r}");
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::from(2)
-                }
-            }
+            set_threads(threads)?;
+            let parsed = load_scene(&scene, &set)?;
+            let calibration = std::time::Duration::from_secs_f64(calibrate_s.clamp(0.0, 600.0));
+            let report = check(&parsed, &file, precision.map(PrecisionArg::precision), calibration).map_err(|e| e.to_string())?;
+            println!("{file}: valid\n{report}");
+            Ok(ExitCode::SUCCESS)
         }
         Command::Preview { frame, view, color, range, size, output } => {
             let view = match view {
@@ -373,31 +352,15 @@ fn main() -> ExitCode {
             let range = match range.as_deref() {
                 None => None,
                 Some(&[min, max]) if min < max => Some((min, max)),
-                Some(r) => {
-                    eprintln!("error: --range: expected MIN,MAX with MIN < MAX, got {r:?}");
-                    return ExitCode::from(2);
-                }
+                Some(r) => return Err(format!("--range: expected MIN,MAX with MIN < MAX, got {r:?}")),
             };
-            match preview(&frame, view, coloring, range, size, output) {
-                Ok(png) => {
-                    println!("{}", png.display());
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::from(2)
-                }
-            }
+            println!("{}", preview(&frame, view, coloring, range, size, output)?.display());
+            Ok(ExitCode::SUCCESS)
         }
         Command::Run { scene, set, out, precision, execution: Execution { backend, threads, quiet, preview }, overwrite } => {
             let file = scene.display().to_string();
-            let parsed = match set_threads(threads).and_then(|()| load_scene(&scene, &set)) {
-                Ok(s) => s,
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return ExitCode::from(2);
-                }
-            };
+            set_threads(threads)?;
+            let parsed = load_scene(&scene, &set)?;
             let options = RunOptions {
                 backend: backend.backend(),
                 out_dir: out.unwrap_or_else(|| PathBuf::from("out").join(&parsed.name)),
@@ -408,15 +371,12 @@ fn main() -> ExitCode {
                 overwrite,
                 stop: Some(coil::interrupt::watch()),
             };
-            finish_run(run(&parsed, &file, &options), &options.out_dir)
+            Ok(finish_run(run(&parsed, &file, &options), &options.out_dir))
         }
         Command::Resume { dir, set, execution: Execution { backend, threads, quiet, preview } } => {
-            if let Err(e) = set_threads(threads) {
-                eprintln!("error: {e}");
-                return ExitCode::from(2);
-            }
+            set_threads(threads)?;
             let options = ResumeOptions { backend: backend.backend(), quiet, preview, set, stop: Some(coil::interrupt::watch()) };
-            finish_run(resume(&dir, &options), &dir)
+            Ok(finish_run(resume(&dir, &options), &dir))
         }
     }
 }
@@ -696,14 +656,10 @@ fn validate_command(quick: bool, only: &[ValidationGroup], out: &Path) -> Result
 }
 
 /// `coil scenes`: every scene file in `dir` with its name and description.
-fn list_scenes(dir: &Path) -> ExitCode {
-    let entries = match std::fs::read_dir(dir) {
-        Ok(e) => e,
-        Err(e) => {
-            eprintln!("error: {}: cannot be read: {e} (run from the repository root, or give the scenes folder)", dir.display());
-            return ExitCode::from(2);
-        }
-    };
+fn list_scenes(dir: &Path) -> Result<ExitCode, String> {
+    let entries = std::fs::read_dir(dir).map_err(|e| {
+        format!("{}: cannot be read: {e} (run from the repository root, or give the scenes folder)", dir.display())
+    })?;
     let mut paths: Vec<PathBuf> =
         entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|x| x == "toml")).collect();
     paths.sort();
@@ -723,7 +679,7 @@ fn list_scenes(dir: &Path) -> ExitCode {
             }
         }
     }
-    status
+    Ok(status)
 }
 
 /// `coil preview`: renders the frame `path` names and returns the PNG written.

@@ -405,6 +405,26 @@ fn an_output_folder_that_cannot_be_created_exits_2_naming_it() {
     std::fs::remove_file(&file).ok();
 }
 
+/// `coil scenes | head -1`: once the reader of stdout has gone, coil ends as Unix filters do
+/// (by SIGPIPE), never with a panic. The read end is closed before coil starts, so its first
+/// line meets the closed pipe every time.
+#[cfg(unix)]
+#[test]
+fn a_closed_stdout_pipe_ends_coil_without_a_panic() {
+    use std::os::unix::process::ExitStatusExt;
+    let (reader, writer) = std::io::pipe().expect("pipe");
+    drop(reader);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_coil"))
+        .args(["scenes", "scenes"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(writer)
+        .output()
+        .expect("coil runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.signal(), Some(libc::SIGPIPE), "{:?}: {stderr}", out.status);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
 /// Asking for a GPU where there is none (no `cuda` feature in this build, or no driver) is a
 /// clear error with exit code 2, never a panic; `auto` falls back to the CPU and says why.
 #[test]
