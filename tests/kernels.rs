@@ -824,11 +824,13 @@ fn rigid_rotation_spin_down_rates() -> [f64; 4] {
 /// back against its motion, a spurious traction of order rho nu omega that spins a small
 /// ball down at a few times nu / R^2 (R = 3.5 spacings) where an exact operator gives zero. The
 /// paper's operator sees only the rate of strain Eq. (8) then (2) makes of it, which the
-/// surface's kernel deficit leaves small but not zero. Measured: 304 and 315 1/s for Müller's
-/// and Morris's, 14.7 1/s for the paper's, 14.0 1/s with hourglass control; nu / R^2 = 81.6
-/// 1/s. It matches the jet runs: the operators that leave rotation nearly free buckle the
-/// rope and swing the pile, the Laplacians do neither (README, jet buckling). The bounds
-/// leave a factor of two either side of the measured figures.
+/// surface's kernel deficit leaves small but not zero. Measured: 304 and 401 1/s for Müller's
+/// and Morris's, 14.7 1/s for the paper's, 30.3 1/s with hourglass control (whose residual at
+/// the surface particles weighs more under the symmetric pair weight than it did under
+/// nu / rho_j: 14.0 1/s then, and 315 1/s for Morris's); nu / R^2 = 81.6 1/s. It matches the
+/// jet runs: the operators that leave rotation nearly free buckle the rope and swing the pile,
+/// the Laplacians do neither (README, jet buckling). The bounds leave a factor of two either
+/// side of the measured figures.
 #[test]
 fn the_laplacians_brake_a_rigid_rotation_that_the_papers_operator_leaves_nearly_free() {
     let [paper, controlled, muller, morris] = rigid_rotation_spin_down_rates();
@@ -841,7 +843,7 @@ fn the_laplacians_brake_a_rigid_rotation_that_the_papers_operator_leaves_nearly_
         assert!(rate > 2.0 * nu_over_r2, "{name} Laplacian spins the ball down at only {rate} 1/s");
     }
     for (name, rate) in [("the paper's operator", paper), ("hourglass control", controlled)] {
-        assert!(rate.abs() < 0.1 * muller.min(morris), "{name} spins the ball down at {rate} 1/s");
+        assert!(rate.abs() < 0.2 * muller.min(morris), "{name} spins the ball down at {rate} 1/s");
     }
 }
 
@@ -903,5 +905,116 @@ fn the_velocity_gradient_skips_only_wall_particles_with_no_fluid_within_h() {
             assert_eq!(bits(skipping), bits(looping), "particle {}", p.id[i]);
         }
         assert!(skipped > walls as usize / 3, "{periodic:?}: {skipped} of {walls} wall particles skipped");
+    }
+}
+
+/// The viscous accelerations of a ball of fluid at rest density (radius 3.5 spacings of
+/// [`sorted_lattice`], densities by Eq. (5), so its surface particles fall short of rho0;
+/// nu = 0.1 m^2/s, no pressure) as matrices of its 3n velocities, row 3i + k the k-th
+/// component of particle i's acceleration (1/s): for the paper's operator, with hourglass
+/// control 1, Müller's and Morris's.
+fn free_surface_viscous_matrices() -> [Vec<f64>; 4] {
+    use coil::particles::{mat3_view_mut, stress_view_mut, vec3_view, ModelFields};
+    use coil_kernels::acceleration::{acceleration, MorrisViscosity, StressDivergence, VelocityLaplacian};
+    use coil_kernels::density::{density_pass, DensityArgs, Poly6};
+    use coil_kernels::hourglass_control::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
+    use coil_kernels::velocity_gradient::{stress_pass, StressArgs};
+    use coil_kernels::view::ViewMut;
+    let (nu0, centre) = (0.1, 0.1);
+    let fields = ModelFields { stress: true, viscosity: true, velocity_gradient: true };
+    let in_ball = |x: [f64; 3]| x.map(|c| c - centre).iter().map(|c| c * c).sum::<f64>().sqrt() <= 3.5 * LATTICE_SPACING;
+    let (mut p, grid, fluid) = sorted_lattice(20, fields, in_ball, |_| [0.0; 3]);
+    let fluid = Fluid { sound_speed2: 0.0, ..fluid };
+    let n = p.len();
+    let nb = grid.neighborhood(vec3_view(&p.position, n), Open);
+    {
+        let args = DensityArgs { neighborhood: nb, fluid, density: ViewMut::new(&mut p.density[..n]) };
+        (0..n).for_each(|i| density_pass::<f64, Poly6, _>(i, &args));
+    }
+    let density = View::new(&p.density[..n]);
+    let dof = 3 * n;
+    let mut matrices: [Vec<f64>; 4] = std::array::from_fn(|_| vec![0.0; dof * dof]);
+    for column in 0..dof {
+        let mut v = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+        v[column % 3][column / 3] = 1.0;
+        let velocity = Vec3View::new(&v[0], &v[1], &v[2]);
+        let stress = stress_view_mut(p.stress.as_mut().expect("allocated"), n);
+        let args = StressArgs { neighborhood: nb, fluid, rheology: Newtonian { nu0 }, velocity, density, stress };
+        (0..n).for_each(|i| stress_pass(i, &args));
+        let gradient = mat3_view_mut(p.velocity_gradient.as_mut().expect("allocated"), n);
+        let viscosity = ViewMut::new(&mut p.viscosity.as_mut().expect("allocated")[..n]);
+        let rheology = Newtonian { nu0 };
+        let args = VelocityGradientArgs { neighborhood: nb, fluid, rheology, velocity, density, gradient, viscosity };
+        (0..n).for_each(|i| velocity_gradient_pass(i, &args));
+        let paper = StressDivergence { stress: stress.read() };
+        let controlled =
+            HourglassControlledStress { coefficient: 1.0, velocity, gradient: gradient.read(), viscosity: viscosity.read() };
+        let muller = VelocityLaplacian { nu0, velocity };
+        let morris = MorrisViscosity { velocity, viscosity: Newtonian { nu0 } };
+        for i in 0..n {
+            let a = [
+                acceleration(i, &nb, &density, &fluid, &paper),
+                acceleration(i, &nb, &density, &fluid, &controlled),
+                acceleration(i, &nb, &density, &fluid, &muller),
+                acceleration(i, &nb, &density, &fluid, &morris),
+            ];
+            for (m, a) in matrices.iter_mut().zip(a) {
+                for (k, a_k) in [a.x, a.y, a.z].into_iter().enumerate() {
+                    m[(3 * i + k) * dof + column] = a_k;
+                }
+            }
+        }
+    }
+    matrices
+}
+
+/// Whether the symmetric `dof` x `dof` matrix `a` is positive definite: its Cholesky
+/// factorisation runs to the end with positive pivots.
+fn is_positive_definite(mut a: Vec<f64>, dof: usize) -> bool {
+    for k in 0..dof {
+        let pivot = a[k * dof + k] - (0..k).map(|j| a[k * dof + j] * a[k * dof + j]).sum::<f64>();
+        if pivot <= 0.0 {
+            return false;
+        }
+        let pivot = pivot.sqrt();
+        a[k * dof + k] = pivot;
+        for i in k + 1..dof {
+            let dot: f64 = (0..k).map(|j| a[i * dof + j] * a[k * dof + j]).sum();
+            a[i * dof + k] = (a[i * dof + k] - dot) / pivot;
+        }
+    }
+    true
+}
+
+/// Viscosity only ever turns kinetic energy into heat: for every velocity field v of a ball
+/// with a free surface, sum_i m v_i · a_i <= 0, that is, minus the symmetric part of the
+/// viscous matrix is positive semidefinite. Shifted by 1e-9 of the matrix's largest row sum
+/// (the null modes, uniform translations, need the shift) it must admit a Cholesky
+/// factorisation. Eq. (8) then (9) and Morris's symmetric pair weight pass; Müller's Laplacian,
+/// whose pair weight m / rho_j is not symmetric where densities differ, does not (a field
+/// gains energy under it at 21 1/s), nor did Morris's operator and hourglass control when they
+/// weighed pairs by nu / rho_j (25 1/s for Morris's). Each operator that passes also conserves
+/// momentum exactly: the accelerations of any field sum to zero (Müller's: up to 695 1/s for a
+/// unit velocity, against a largest row sum of 7 500 1/s).
+#[test]
+fn the_viscous_operators_but_mullers_never_create_kinetic_energy_or_momentum_at_a_free_surface() {
+    let matrices = free_surface_viscous_matrices();
+    let dof = ((matrices[0].len() as f64).sqrt()).round() as usize;
+    let names = ["the paper's operator", "hourglass control", "Müller's Laplacian", "Morris's operator"];
+    for (name, l) in names.iter().zip(&matrices) {
+        let decay: Vec<f64> = (0..dof * dof).map(|k| -0.5 * (l[k] + l[(k % dof) * dof + k / dof])).collect();
+        let scale = (0..dof).map(|r| (0..dof).map(|c| decay[r * dof + c].abs()).sum::<f64>()).fold(0.0, f64::max);
+        let mut shifted = decay;
+        (0..dof).for_each(|k| shifted[k * dof + k] += 1e-9 * scale);
+        let dissipative = is_positive_definite(shifted, dof);
+        // Column c is the field with one velocity component 1: its accelerations' sum per axis.
+        let net_force = (0..dof)
+            .flat_map(|c| (0..3).map(move |k| (c, k)))
+            .map(|(c, k)| (0..dof / 3).map(|i| l[(3 * i + k) * dof + c]).sum::<f64>().abs())
+            .fold(0.0, f64::max);
+        eprintln!("{name}: dissipative {dissipative}, largest net acceleration {net_force:.2e} 1/s against {scale:.2e}");
+        let muller = *name == "Müller's Laplacian";
+        assert_eq!(dissipative, !muller, "{name}: dissipative {dissipative}");
+        assert_eq!(net_force < 1e-12 * scale, !muller, "{name}: net acceleration {net_force} 1/s");
     }
 }

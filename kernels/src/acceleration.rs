@@ -133,9 +133,13 @@ impl<R: Real> ParticleViscosity<R> for View<'_, R> {
     }
 }
 
-/// Morris, Fox & Zhu 1997's operator: sum_j m_j (nu_i + nu_j) / 2 (v_j - v_i) / rho_j F(r),
-/// with Morris's Laplacian weight F (`SmoothingKernels::morris_laplacian`), the kinematic form
-/// of their (mu_i + mu_j) / (rho_i rho_j) sum. With nu from [`crate::shear_viscosity`] it
+/// Morris, Fox & Zhu 1997's operator: sum_j m_j (mu_i + mu_j) / (2 rho_i rho_j) (v_j - v_i) F(r)
+/// with mu = rho nu, that is m_j (nu_i / rho_j + nu_j / rho_i) / 2, and Morris's Laplacian
+/// weight F (`SmoothingKernels::morris_laplacian`). The pair weight ([`morris_pair_weight`]) is
+/// symmetric in i and j, so pair forces cancel and every pair takes kinetic energy out, at
+/// m^2 w_ij F |v_i - v_j|^2, whatever the densities: at a free surface, whose densities fall
+/// short of rho0, (nu_i + nu_j) / (2 rho_j) would do neither. With nu from
+/// [`crate::shear_viscosity`] it
 /// carries the Cross model: it discretises div(nu grad v), which is (1/rho) div tau wherever nu
 /// varies only across the streamlines (every channel flow) and leaves out grad nu · grad v^T
 /// elsewhere. Unlike Eq. (8) then (9) it has no odd-even null mode, and unlike Müller's kernel
@@ -151,17 +155,17 @@ pub struct MorrisViscosity<'a, R, Nu> {
 
 impl<R: Real, Nu: ParticleViscosity<R>> ViscousOperator<R> for MorrisViscosity<'_, R, Nu> {
     const NAME: &'static str = Nu::OPERATOR_NAME;
-    /// Velocity (m/s) and half the viscosity (m^2/s).
-    type Own = (Vec3<R>, R);
+    /// Velocity (m/s), half the viscosity (m^2/s) and 1 / rho_i (m^3/kg).
+    type Own = (Vec3<R>, R, R);
     #[inline(always)]
-    fn own(&self, i: usize, _density_i: R) -> (Vec3<R>, R) {
+    fn own(&self, i: usize, density_i: R) -> (Vec3<R>, R, R) {
         let [x, y, z] = self.velocity.at(i);
-        (Vec3::new(x, y, z), self.viscosity.at(i) * R::from_f64(0.5))
+        (Vec3::new(x, y, z), self.viscosity.at(i) * R::from_f64(0.5), R::ONE / density_i)
     }
     #[inline(always)]
     fn pair(
         &self,
-        own: &(Vec3<R>, R),
+        own: &(Vec3<R>, R, R),
         j: usize,
         density_j: R,
         _r_ij: Vec3<R>,
@@ -170,9 +174,17 @@ impl<R: Real, Nu: ParticleViscosity<R>> ViscousOperator<R> for MorrisViscosity<'
         kernels: &SmoothingKernels<R>,
     ) -> Vec3<R> {
         let [x, y, z] = self.velocity.at(j);
-        let nu_ij = own.1 + self.viscosity.at(j) * R::from_f64(0.5);
-        (Vec3::new(x, y, z) - own.0) * (nu_ij * kernels.morris_laplacian(r2) / density_j)
+        let weight = morris_pair_weight(own.1, own.2, self.viscosity.at(j), R::ONE / density_j);
+        (Vec3::new(x, y, z) - own.0) * (weight * kernels.morris_laplacian(r2))
     }
+}
+
+/// Morris et al.'s pair weight (mu_i + mu_j) / (2 rho_i rho_j) with mu = rho nu, that is
+/// (nu_i / rho_j + nu_j / rho_i) / 2 (m^5/(kg s)), from half of nu_i (m^2/s), 1 / rho_i
+/// (m^3/kg), nu_j and 1 / rho_j.
+#[inline(always)]
+pub fn morris_pair_weight<R: Real>(half_viscosity_i: R, inverse_density_i: R, viscosity_j: R, inverse_density_j: R) -> R {
+    half_viscosity_i * inverse_density_j + viscosity_j * R::from_f64(0.5) * inverse_density_i
 }
 
 /// Acceleration of fluid particle `i` (m/s^2): pressure, Eq. (7), as an acceleration,

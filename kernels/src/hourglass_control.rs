@@ -12,7 +12,7 @@
 //! order in the spacing for a smooth one, so the continuum operator stays the paper's; the
 //! alternating mode has no gradient, so it gets the full Laplacian's damping.
 
-use crate::acceleration::ViscousOperator;
+use crate::acceleration::{morris_pair_weight, ViscousOperator};
 use crate::cell_grid::{Neighborhood, Neighbors};
 use crate::cross_viscosity::Rheology;
 use crate::fluid::Fluid;
@@ -54,7 +54,9 @@ pub fn velocity_gradient_pass<R: Real, Rh: Rheology<R>, N: Neighbors>(i: usize, 
 
 /// Eq. (9), sum_j m_j (tau_i / rho_i^2 + tau_j / rho_j^2) · grad_i W with tau = rho nu D, plus
 /// `coefficient` times Morris's Laplacian of the hourglass residual e_ij (see the module docs),
-/// sum_j m_j (nu_i + nu_j) / 2 e_ij / rho_j F(r).
+/// sum_j m_j (nu_i / rho_j + nu_j / rho_i) / 2 e_ij F(r), whose pair weight is that of
+/// [`MorrisViscosity`](crate::acceleration::MorrisViscosity), [`morris_pair_weight`]: symmetric,
+/// so with e_ji = -e_ij pair forces cancel.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct HourglassControlledStress<'a, R> {
@@ -77,6 +79,8 @@ pub struct OwnGradient<R> {
     stress_over_density2: SymTensor<R>,
     /// nu_i / 2 (m^2/s).
     half_viscosity: R,
+    /// 1 / rho_i (m^3/kg).
+    inverse_density: R,
 }
 
 impl<R: Real> HourglassControlledStress<'_, R> {
@@ -99,6 +103,7 @@ impl<R: Real> ViscousOperator<R> for HourglassControlledStress<'_, R> {
             gradient,
             stress_over_density2: rate_of_deformation(gradient).scaled(nu / density_i),
             half_viscosity: nu * R::from_f64(0.5),
+            inverse_density: R::ONE / density_i,
         }
     }
     #[inline(always)]
@@ -118,7 +123,7 @@ impl<R: Real> ViscousOperator<R> for HourglassControlledStress<'_, R> {
         let stress = (own.stress_over_density2 + rate_of_deformation(gradient_j).scaled(nu_j * inv_rho_j)).dot(grad_w);
         let [x, y, z] = self.velocity.at(j);
         let residual = Vec3::new(x, y, z) - own.velocity + (own.gradient + gradient_j).dot(r_ij) * R::from_f64(0.5);
-        let nu_ij = own.half_viscosity + nu_j * R::from_f64(0.5);
-        stress + residual * (self.coefficient * nu_ij * kernels.morris_laplacian(r2) * inv_rho_j)
+        let weight = morris_pair_weight(own.half_viscosity, own.inverse_density, nu_j, inv_rho_j);
+        stress + residual * (self.coefficient * weight * kernels.morris_laplacian(r2))
     }
 }
