@@ -755,68 +755,87 @@ fn a_grid_of_many_scan_chunks_sorts_every_particle_into_its_cell() {
     }
 }
 
-/// Spin-down rate (1/s) each viscous operator gives a ball of fluid (radius 3.5 spacings of
-/// [`sorted_lattice`], densities by Eq. (5), nu = 0.1 m^2/s) turning
-/// rigidly about y: minus the viscous torque about the axis over the angular momentum.
-/// Returned for the paper's operator, with hourglass control 1, Müller's and Morris's.
-fn rigid_rotation_spin_down_rates() -> [f64; 4] {
-    use coil::particles::{mat3_view_mut, stress_view_mut, vec3_view, ModelFields};
-    use coil_kernels::acceleration::{acceleration, MorrisViscosity, StressDivergence, VelocityLaplacian};
-    use coil_kernels::density::{density_pass, DensityArgs, Poly6};
-    use coil_kernels::hourglass_control::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
-    use coil_kernels::velocity_gradient::{stress_pass, StressArgs};
-    use coil_kernels::view::ViewMut;
-    let (nu0, omega, centre) = (0.1, 1.0, 0.1);
-    let fields = ModelFields { stress: true, viscosity: true, velocity_gradient: true };
-    let offset = |x: [f64; 3]| x.map(|c| c - centre);
-    let in_ball = |x: [f64; 3]| offset(x).iter().map(|c| c * c).sum::<f64>().sqrt() <= 3.5 * LATTICE_SPACING;
-    let turning = |x: [f64; 3]| {
-        let d = offset(x);
-        [omega * d[2], 0.0, -omega * d[0]]
-    };
-    let (mut p, grid, fluid) = sorted_lattice(20, fields, in_ball, turning);
-    let n = p.len();
-    let nb = grid.neighborhood(vec3_view(&p.position, n), Open);
-    {
-        let args = DensityArgs { neighborhood: nb, fluid, density: ViewMut::new(&mut p.density[..n]) };
+/// A ball of fluid, radius 3.5 spacings of [`sorted_lattice`] (the lattice's own velocities
+/// unused), with densities by Eq. (5), so that its surface particles fall short of rho0, and
+/// no pressure (c = 0) or gravity: the accelerations it gives are viscous only.
+struct Ball {
+    particles: coil::particles::Particles<f64>,
+    grid: coil::neighbor_grid::NeighborGrid,
+    fluid: Fluid<f64>,
+}
+
+/// Centre of the [`Ball`] (m, each coordinate).
+const BALL_CENTRE: f64 = 0.1;
+
+impl Ball {
+    fn new() -> Ball {
+        use coil::particles::{vec3_view, ModelFields};
+        use coil_kernels::density::{density_pass, DensityArgs, Poly6};
+        use coil_kernels::view::ViewMut;
+        let fields = ModelFields { stress: true, viscosity: true, velocity_gradient: true };
+        let in_ball = |x: [f64; 3]| x.map(|c| c - BALL_CENTRE).iter().map(|c| c * c).sum::<f64>().sqrt() <= 3.5 * LATTICE_SPACING;
+        let (mut particles, grid, fluid) = sorted_lattice(20, fields, in_ball, |_| [0.0; 3]);
+        let fluid = Fluid { sound_speed2: 0.0, ..fluid };
+        let n = particles.len();
+        let args = DensityArgs {
+            neighborhood: grid.neighborhood(vec3_view(&particles.position, n), Open),
+            fluid,
+            density: ViewMut::new(&mut particles.density[..n]),
+        };
         (0..n).for_each(|i| density_pass::<f64, Poly6, _>(i, &args));
+        Ball { particles, grid, fluid }
     }
-    let velocity = vec3_view(&p.velocity, n);
-    let density = View::new(&p.density[..n]);
-    let stress = stress_view_mut(p.stress.as_mut().expect("allocated"), n);
-    let args = StressArgs { neighborhood: nb, fluid, rheology: Newtonian { nu0 }, velocity, density, stress };
-    (0..n).for_each(|i| stress_pass(i, &args));
-    let gradient = mat3_view_mut(p.velocity_gradient.as_mut().expect("allocated"), n);
-    let viscosity = ViewMut::new(&mut p.viscosity.as_mut().expect("allocated")[..n]);
-    let args =
-        VelocityGradientArgs { neighborhood: nb, fluid, rheology: Newtonian { nu0 }, velocity, density, gradient, viscosity };
-    (0..n).for_each(|i| velocity_gradient_pass(i, &args));
-    // Pressure and gravity, which every operator's acceleration includes, to subtract.
-    let inviscid = VelocityLaplacian { nu0: 0.0, velocity };
-    let inviscid: Vec<Vec3<f64>> = (0..n).map(|i| acceleration(i, &nb, &density, &fluid, &inviscid)).collect();
-    let arm = |i: usize| (p.position[0][i] - centre, p.position[2][i] - centre);
-    let angular_momentum: f64 = (0..n).map(arm).map(|(dx, dz)| omega * (dx * dx + dz * dz)).sum();
-    let rate = |viscous_at: &dyn Fn(usize) -> Vec3<f64>| {
-        let torque: f64 = (0..n)
-            .map(|i| {
-                let (dx, dz) = arm(i);
-                let a = viscous_at(i) - inviscid[i];
-                dz * a.x - dx * a.z
-            })
-            .sum();
+
+    /// The viscous accelerations (m/s^2) of the particles moving at `velocity` (m/s, by axis),
+    /// nu = 0.1 m^2/s: by the paper's operator, with hourglass control 1, Müller's and Morris's.
+    fn viscous_accelerations(&mut self, velocity: &[Vec<f64>; 3]) -> [Vec<Vec3<f64>>; 4] {
+        use coil::particles::{mat3_view_mut, stress_view_mut, vec3_view};
+        use coil_kernels::acceleration::{acceleration, MorrisViscosity, StressDivergence, VelocityLaplacian};
+        use coil_kernels::hourglass_control::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
+        use coil_kernels::velocity_gradient::{stress_pass, StressArgs};
+        use coil_kernels::view::ViewMut;
+        let (nu0, fluid, p) = (0.1, self.fluid, &mut self.particles);
+        let n = p.len();
+        let nb = self.grid.neighborhood(vec3_view(&p.position, n), Open);
+        let velocity = vec3_view(velocity, n);
+        let density = View::new(&p.density[..n]);
+        let stress = stress_view_mut(p.stress.as_mut().expect("allocated"), n);
+        let args = StressArgs { neighborhood: nb, fluid, rheology: Newtonian { nu0 }, velocity, density, stress };
+        (0..n).for_each(|i| stress_pass(i, &args));
+        let gradient = mat3_view_mut(p.velocity_gradient.as_mut().expect("allocated"), n);
+        let viscosity = ViewMut::new(&mut p.viscosity.as_mut().expect("allocated")[..n]);
+        let rheology = Newtonian { nu0 };
+        let args = VelocityGradientArgs { neighborhood: nb, fluid, rheology, velocity, density, gradient, viscosity };
+        (0..n).for_each(|i| velocity_gradient_pass(i, &args));
+        let paper = StressDivergence { stress: stress.read() };
+        let controlled =
+            HourglassControlledStress { coefficient: 1.0, velocity, gradient: gradient.read(), viscosity: viscosity.read() };
+        let muller = VelocityLaplacian { nu0, velocity };
+        let morris = MorrisViscosity { velocity, viscosity: Newtonian { nu0 } };
+        [
+            (0..n).map(|i| acceleration(i, &nb, &density, &fluid, &paper)).collect(),
+            (0..n).map(|i| acceleration(i, &nb, &density, &fluid, &controlled)).collect(),
+            (0..n).map(|i| acceleration(i, &nb, &density, &fluid, &muller)).collect(),
+            (0..n).map(|i| acceleration(i, &nb, &density, &fluid, &morris)).collect(),
+        ]
+    }
+}
+
+/// Spin-down rate (1/s) each viscous operator gives the [`Ball`] turning rigidly about y:
+/// minus the viscous torque about the axis over the angular momentum. Returned for the paper's
+/// operator, with hourglass control 1, Müller's and Morris's.
+fn rigid_rotation_spin_down_rates() -> [f64; 4] {
+    let omega = 1.0;
+    let mut ball = Ball::new();
+    let p = &ball.particles;
+    let arms: Vec<(f64, f64)> = (0..p.len()).map(|i| (p.position[0][i] - BALL_CENTRE, p.position[2][i] - BALL_CENTRE)).collect();
+    let turning =
+        [arms.iter().map(|a| omega * a.1).collect(), vec![0.0; arms.len()], arms.iter().map(|a| -omega * a.0).collect()];
+    let angular_momentum: f64 = arms.iter().map(|(dx, dz)| omega * (dx * dx + dz * dz)).sum();
+    ball.viscous_accelerations(&turning).map(|a| {
+        let torque: f64 = arms.iter().zip(&a).map(|((dx, dz), a)| dz * a.x - dx * a.z).sum();
         -torque / angular_momentum
-    };
-    let paper = StressDivergence { stress: stress.read() };
-    let controlled =
-        HourglassControlledStress { coefficient: 1.0, velocity, gradient: gradient.read(), viscosity: viscosity.read() };
-    let muller = VelocityLaplacian { nu0, velocity };
-    let morris = MorrisViscosity { velocity, viscosity: Newtonian { nu0 } };
-    [
-        rate(&|i| acceleration(i, &nb, &density, &fluid, &paper)),
-        rate(&|i| acceleration(i, &nb, &density, &fluid, &controlled)),
-        rate(&|i| acceleration(i, &nb, &density, &fluid, &muller)),
-        rate(&|i| acceleration(i, &nb, &density, &fluid, &morris)),
-    ]
+    })
 }
 
 /// A rigid rotation has no rate of strain, so an exact viscous term leaves it alone. The SPH
@@ -908,57 +927,19 @@ fn the_velocity_gradient_skips_only_wall_particles_with_no_fluid_within_h() {
     }
 }
 
-/// The viscous accelerations of a ball of fluid at rest density (radius 3.5 spacings of
-/// [`sorted_lattice`], densities by Eq. (5), so its surface particles fall short of rho0;
-/// nu = 0.1 m^2/s, no pressure) as matrices of its 3n velocities, row 3i + k the k-th
-/// component of particle i's acceleration (1/s): for the paper's operator, with hourglass
+/// The viscous accelerations of the [`Ball`] as matrices of its 3n velocities, row 3i + k the
+/// k-th component of particle i's acceleration (1/s): for the paper's operator, with hourglass
 /// control 1, Müller's and Morris's.
 fn free_surface_viscous_matrices() -> [Vec<f64>; 4] {
-    use coil::particles::{mat3_view_mut, stress_view_mut, vec3_view, ModelFields};
-    use coil_kernels::acceleration::{acceleration, MorrisViscosity, StressDivergence, VelocityLaplacian};
-    use coil_kernels::density::{density_pass, DensityArgs, Poly6};
-    use coil_kernels::hourglass_control::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
-    use coil_kernels::velocity_gradient::{stress_pass, StressArgs};
-    use coil_kernels::view::ViewMut;
-    let (nu0, centre) = (0.1, 0.1);
-    let fields = ModelFields { stress: true, viscosity: true, velocity_gradient: true };
-    let in_ball = |x: [f64; 3]| x.map(|c| c - centre).iter().map(|c| c * c).sum::<f64>().sqrt() <= 3.5 * LATTICE_SPACING;
-    let (mut p, grid, fluid) = sorted_lattice(20, fields, in_ball, |_| [0.0; 3]);
-    let fluid = Fluid { sound_speed2: 0.0, ..fluid };
-    let n = p.len();
-    let nb = grid.neighborhood(vec3_view(&p.position, n), Open);
-    {
-        let args = DensityArgs { neighborhood: nb, fluid, density: ViewMut::new(&mut p.density[..n]) };
-        (0..n).for_each(|i| density_pass::<f64, Poly6, _>(i, &args));
-    }
-    let density = View::new(&p.density[..n]);
+    let mut ball = Ball::new();
+    let n = ball.particles.len();
     let dof = 3 * n;
     let mut matrices: [Vec<f64>; 4] = std::array::from_fn(|_| vec![0.0; dof * dof]);
     for column in 0..dof {
         let mut v = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
         v[column % 3][column / 3] = 1.0;
-        let velocity = Vec3View::new(&v[0], &v[1], &v[2]);
-        let stress = stress_view_mut(p.stress.as_mut().expect("allocated"), n);
-        let args = StressArgs { neighborhood: nb, fluid, rheology: Newtonian { nu0 }, velocity, density, stress };
-        (0..n).for_each(|i| stress_pass(i, &args));
-        let gradient = mat3_view_mut(p.velocity_gradient.as_mut().expect("allocated"), n);
-        let viscosity = ViewMut::new(&mut p.viscosity.as_mut().expect("allocated")[..n]);
-        let rheology = Newtonian { nu0 };
-        let args = VelocityGradientArgs { neighborhood: nb, fluid, rheology, velocity, density, gradient, viscosity };
-        (0..n).for_each(|i| velocity_gradient_pass(i, &args));
-        let paper = StressDivergence { stress: stress.read() };
-        let controlled =
-            HourglassControlledStress { coefficient: 1.0, velocity, gradient: gradient.read(), viscosity: viscosity.read() };
-        let muller = VelocityLaplacian { nu0, velocity };
-        let morris = MorrisViscosity { velocity, viscosity: Newtonian { nu0 } };
-        for i in 0..n {
-            let a = [
-                acceleration(i, &nb, &density, &fluid, &paper),
-                acceleration(i, &nb, &density, &fluid, &controlled),
-                acceleration(i, &nb, &density, &fluid, &muller),
-                acceleration(i, &nb, &density, &fluid, &morris),
-            ];
-            for (m, a) in matrices.iter_mut().zip(a) {
+        for (m, a) in matrices.iter_mut().zip(ball.viscous_accelerations(&v)) {
+            for (i, a) in a.iter().enumerate() {
                 for (k, a_k) in [a.x, a.y, a.z].into_iter().enumerate() {
                     m[(3 * i + k) * dof + column] = a_k;
                 }
