@@ -172,6 +172,35 @@ fn above_the_bound_the_guard_stops_the_run_with_its_diagnosis() {
     std::fs::remove_dir_all(&out).ok();
 }
 
+/// The shipped Newtonian jet (paper's operator, 5 particles across D) from H/D = 12 has no room
+/// above Eq. (10), unlike the channels and the drop: at the bound its fastest particle moves at
+/// 2.2 m/s to 0.8 s; at 1.5 times the bound the rope folds as at the bound but a particle is
+/// thrown past the guard's 9.2 m/s at 0.508 s (measured; the guard's former c instead of 0.1 c
+/// let it reach 16.1 m/s unstopped). The guard must stop it there, name dt as the likely cause
+/// and keep the frames written before, the rope's whole fall onto the plate among them.
+#[test]
+fn the_jet_at_one_and_a_half_times_the_bound_is_stopped_by_the_guard() {
+    let mut scene =
+        Scene::load_with(std::path::Path::new("scenes/newtonian_jet.toml"), &[]).expect("the shipped scene");
+    scene.inlets[0].position_m[1] = 0.24;
+    scene.domain.max_m[1] = 0.27;
+    scene.simulation.end_time_s = 0.6;
+    scene.simulation.time_step.safety_factor = 1.5;
+    scene.simulation.time_step.allow_above_stability_bound = true;
+    let out = std::env::temp_dir().join(format!("coil-stability-jet-{}", std::process::id()));
+    let result = run(&scene, "newtonian_jet.toml", &quiet_run_options(&out));
+    std::fs::remove_dir_all(&out).ok();
+    match result {
+        Err(RunError::Unstable(instability, summary)) => {
+            let text = RunError::Unstable(instability.clone(), summary.clone()).to_string();
+            assert!(text.contains("above the Eq. (10) bound"), "{text}");
+            // The rope reaches the plate at about 0.2 s.
+            assert!(instability.time_s > 0.3 && summary.frames as f64 >= instability.time_s / 0.02, "{text}: {summary:?}");
+        }
+        other => panic!("expected the guard to stop the jet, got {other:?}"),
+    }
+}
+
 #[test]
 fn very_low_and_very_high_sound_speeds_run() {
     // Mach about 1 for the falling block at 0.5 m/s, and c = 500 m/s, where the acoustic term
