@@ -140,9 +140,9 @@ fn extreme_shear_thinning_runs_stably_at_the_bound() {
     }
 }
 
-/// Eq. (10) keeps a factor of 10 below the acoustic and viscous limits, so 1.5 times the bound
-/// still runs (measured below); the guard must stop a step far enough above the bound, keep the
-/// frames written before, name dt as the likely cause, and never write a NaN.
+/// In the drop 1.5 times the bound still runs (the jet below has no such room); the guard must
+/// stop a step far enough above the bound, keep the frames written before, name dt as the
+/// likely cause, and never write a NaN.
 #[test]
 fn above_the_bound_the_guard_stops_the_run_with_its_diagnosis() {
     let viscous = "nu0_m2_s = 0.05";
