@@ -16,7 +16,7 @@ const SAMPLE_EVERY_S: f64 = 0.02;
 /// The shipped jet's axis and its scene with the nozzle `height_over_d` diameters above the
 /// plate, operator `op` with hourglass control of weight `hourglass_control`, run to
 /// `end_time_s`.
-fn jet_scene(
+pub fn jet_scene(
     height_over_d: f64,
     op: ViscosityOperator,
     hourglass_control: f64,
