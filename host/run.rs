@@ -297,13 +297,17 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
     }
     let scene = Scene::load_with(&log_path, &overrides).map_err(RunError::Scene)?;
     let checkpoint_path = dir.join(checkpoint::FILE_NAME);
-    let checkpoint = Checkpoint::read(&checkpoint_path).map_err(|e| bad(&checkpoint_path, "(file)", e))?;
+    let mut checkpoint = Checkpoint::read(&checkpoint_path).map_err(|e| bad(&checkpoint_path, "(file)", e))?;
     if checkpoint.fingerprint != checkpoint::fingerprint(&scene) {
         return Err(bad(
             &checkpoint_path,
             "(file)",
             format!("was taken from another scene than the one {} logs (edited since the run?)", log_path.display()),
         ));
+    }
+    let logged = Scene::load_with(&log_path, &[]).map_err(RunError::Scene)?;
+    if scene.output.every_s != logged.output.every_s {
+        checkpoint.tally.reschedule(scene.output.every_s, checkpoint.time);
     }
     let end = scene.simulation.end_time_s;
     if checkpoint.time >= end * (1.0 - 1e-12) {
@@ -571,6 +575,23 @@ pub struct Tally {
     pub max_speed: f64,
     /// Wall time the run has taken (s): before this process, then up to the last checkpoint.
     pub wall_s: f64,
+}
+
+impl Tally {
+    /// Puts the next frame `every_s` after the last one written, or at the first such time after
+    /// `now` (s), for a run resumed with another `output.every_s`: the schedule it was stopped on
+    /// would write its next frame at the old interval.
+    pub fn reschedule(&mut self, every_s: Option<f64>, now: f64) {
+        let Some(every) = every_s else {
+            self.next_frame_time = f64::INFINITY;
+            return;
+        };
+        let mut next = self.frame_times.last().copied().unwrap_or(0.0) + every;
+        while next <= now * (1.0 + 1e-9) {
+            next += every;
+        }
+        self.next_frame_time = next;
+    }
 }
 
 fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(

@@ -278,6 +278,29 @@ fn a_run_stopped_by_ctrl_c_resumes_to_the_frames_of_one_never_stopped() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A run resumed with another `output.every_s` writes its next frame that interval after its last
+/// one, not at the interval it was stopped on.
+#[test]
+fn a_run_resumed_with_another_frame_interval_takes_it_up_at_once() {
+    let dir = std::env::temp_dir().join(format!("coil-resume-every-{}", std::process::id()));
+    let out = dir.join("run");
+    let done = common::coil(&dam_break_run(&out, &["output.every_s=0.01", "simulation.end_time_s=0.02"]));
+    assert!(done.status.success(), "{}", String::from_utf8_lossy(&done.stderr));
+    let args = ["simulation.end_time_s=0.03", "output.every_s=0.0025"].map(|s| ["--set", s]).concat();
+    let resumed = common::coil(&[&["resume", out.to_str().expect("utf-8"), "--quiet"][..], &args].concat());
+    assert!(resumed.status.success(), "{}", String::from_utf8_lossy(&resumed.stderr));
+    let pvd = std::fs::read_to_string(out.join("dam_break.pvd")).expect("series");
+    let times: Vec<f64> =
+        pvd.split("timestep=\"").skip(1).map(|s| s[..s.find('"').expect("quote")].parse().expect("a time")).collect();
+    let dt = 0.08 / 400.0;
+    let due = [0.0, 0.01, 0.02, 0.0225, 0.025, 0.0275, 0.03];
+    assert_eq!(times.len(), due.len(), "{times:?}");
+    for (t, due) in times.iter().zip(due) {
+        assert!(*t >= due - 1e-9 && *t < due + dt, "a frame at {t} s, due at {due} s: {times:?}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// `coil resume` refuses, naming the file and the reason, a folder that is not a run's, a
 /// checkpoint cut short or missing, a log whose scene was edited since the checkpoint, and a
 /// `--set` of the physics the checkpoint holds.
