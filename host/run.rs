@@ -305,8 +305,7 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
             format!("was taken from another scene than the one {} logs (edited since the run?)", log_path.display()),
         ));
     }
-    let logged = Scene::load_with(&log_path, &[]).map_err(RunError::Scene)?;
-    if scene.output.every_s != logged.output.every_s {
+    if scene.output.every_s != log["scene"]["output"]["every_s"].as_f64() {
         checkpoint.tally.reschedule(scene.output.every_s, checkpoint.time);
     }
     let end = scene.simulation.end_time_s;
@@ -586,11 +585,15 @@ impl Tally {
             self.next_frame_time = f64::INFINITY;
             return;
         };
-        let mut next = self.frame_times.last().copied().unwrap_or(0.0) + every;
-        while next <= now * (1.0 + 1e-9) {
-            next += every;
+        self.next_frame_time = self.frame_times.last().copied().unwrap_or(0.0) + every;
+        self.schedule_past(now, every_s);
+    }
+
+    /// Moves the next frame past `now` (s) in steps of `every_s`.
+    fn schedule_past(&mut self, now: f64, every_s: Option<f64>) {
+        while self.next_frame_time <= now * (1.0 + 1e-9) {
+            self.next_frame_time += every_s.unwrap_or(f64::INFINITY);
         }
-        self.next_frame_time = next;
     }
 }
 
@@ -710,9 +713,7 @@ fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
             }
             let sim = state.sim();
             write_frame(sim, &mut tally)?;
-            while tally.next_frame_time <= sim.time * (1.0 + 1e-9) {
-                tally.next_frame_time += every_s.unwrap_or(f64::INFINITY);
-            }
+            tally.schedule_past(sim.time, every_s);
             save_checkpoint(sim, &mut tally)?;
         }
         if !options.quiet && last_report.elapsed() >= Duration::from_millis(200) {

@@ -221,6 +221,12 @@ fn run_log(dir: &std::path::Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(dir.join("run.json")).expect("log")).expect("whole JSON")
 }
 
+/// The simulated times (s) a `.pvd` series lists, in its order.
+fn series_times(pvd: &std::path::Path) -> Vec<f64> {
+    let text = std::fs::read_to_string(pvd).expect("series");
+    text.split("timestep=\"").skip(1).map(|s| s[..s.find('"').expect("quote")].parse().expect("a time")).collect()
+}
+
 /// Ctrl-C, then `coil resume`: the frames and series come out byte for byte as from a run never
 /// stopped, and the log's summary counts the whole run. A finished run goes further with a
 /// later end time and not without one.
@@ -271,9 +277,7 @@ fn a_run_stopped_by_ctrl_c_resumes_to_the_frames_of_one_never_stopped() {
     for (name, bytes) in a.iter().filter(|f| f.0.starts_with("frame_")) {
         assert!(extended.iter().any(|(n, b)| n == name && b == bytes), "{name} rewritten by the extension");
     }
-    let pvd = std::fs::read_to_string(stopped.join("dam_break.pvd")).expect("series");
-    let times: Vec<f64> =
-        pvd.split("timestep=\"").skip(1).map(|s| s[..s.find('"').expect("quote")].parse().expect("a time")).collect();
+    let times = series_times(&stopped.join("dam_break.pvd"));
     assert!(times.len() == 21 && times.windows(2).all(|w| w[0] < w[1]) && times[20] == 0.08, "{times:?}");
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -289,9 +293,7 @@ fn a_run_resumed_with_another_frame_interval_takes_it_up_at_once() {
     let args = ["simulation.end_time_s=0.03", "output.every_s=0.0025"].map(|s| ["--set", s]).concat();
     let resumed = common::coil(&[&["resume", out.to_str().expect("utf-8"), "--quiet"][..], &args].concat());
     assert!(resumed.status.success(), "{}", String::from_utf8_lossy(&resumed.stderr));
-    let pvd = std::fs::read_to_string(out.join("dam_break.pvd")).expect("series");
-    let times: Vec<f64> =
-        pvd.split("timestep=\"").skip(1).map(|s| s[..s.find('"').expect("quote")].parse().expect("a time")).collect();
+    let times = series_times(&out.join("dam_break.pvd"));
     // The dam break steps at its Eq. (10) bound, 400 steps to 0.08 s (as the test above counts).
     let dt = 0.08 / 400.0;
     let due = [0.0, 0.01, 0.02, 0.0225, 0.025, 0.0275, 0.03];
