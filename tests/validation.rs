@@ -350,8 +350,8 @@ fn the_front_radius_reads_huppert_profiles_and_the_law_inverts() {
 }
 
 /// Huppert's spreading at 6 particles across the released radius with Morris's operator: the
-/// fitted exponent and prefactor within the 10 % (measured: 0.079 and 0.041; at 8
-/// across the exponent's error is 0.105, above it, at 10 across 0.066; README, Huppert).
+/// fitted exponent and prefactor within the 10 % (measured: 0.071 and 0.040; at 8
+/// across the exponent's error is 0.091, at 10 across 0.057; README, Huppert).
 #[test]
 fn huppert_spreading_follows_the_similarity_law_with_morris() {
     use coil::validation::huppert::{simulate, Release, HUPPERT_PREFACTOR};
