@@ -160,7 +160,7 @@ pub fn startup_poiseuille_in(channel: &Channel, out: Option<&Path>) -> Result<Ca
     Ok(CaseResult {
         case,
         measure: format!(
-            "max |u - u_ref| / u_max at nu t / L^2 = {MORRIS_TIMES:?}; c = {} m/s (Mach {})",
+            "max |u - u_ref| / u_max at nu t / L^2 = {MORRIS_TIMES:?}; c = {} m/s (Mach {:.3})",
             channel.sound_speed_m_s,
             channel.newtonian_peak() / channel.sound_speed_m_s
         ),
