@@ -9,7 +9,7 @@ use coil::output::vtu_read::read_frame;
 use coil::output::write_atomically;
 use coil::preview::{frame_path, render_frame, Coloring, View};
 use coil::run::{resume, run, Backend, ResumeOptions, RunError, RunOptions, Summary};
-use coil::scene::{Precision, Scene};
+use coil::scene::{Precision, Scene, ViscousVelocity};
 use coil::scene_override::Override;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -173,9 +173,10 @@ enum Command {
         out: PathBuf,
     },
     /// Measure what each speed-for-accuracy knob buys on the two Poiseuille cases (resolution,
-    /// operator, dt safety factor, sound speed, precision, walls, density kernel): error against
-    /// the reference and the median wall time of each trial's repeats; writes tradeoff.md,
-    /// tradeoff.csv and tradeoff.png (error against time, the Pareto front drawn).
+    /// operator, dt safety factor, the velocity the viscous terms read, sound speed, precision,
+    /// walls, density kernel): error against the reference and the median wall time of each
+    /// trial's repeats; writes tradeoff.md, tradeoff.csv and tradeoff.png (error against time,
+    /// the Pareto front drawn).
     Tradeoff {
         /// A few coarse trials (about 13 s a repeat) instead of the full sweep (about 5 minutes a
         /// repeat, on 2 cores).
@@ -424,11 +425,19 @@ fn finish_run(result: Result<Summary, RunError>, out_dir: &Path) -> ExitCode {
             eprintln!("error: {e}");
             match &e {
                 RunError::Interrupted(_) => eprintln!("`coil resume {}` continues it", out_dir.display()),
-                RunError::Unstable(i, _) => eprintln!(
-                    "`coil resume {} --set simulation.time_step.fixed_s={:.3e}` continues it from its last frame with a smaller dt",
-                    out_dir.display(),
-                    (0.5 * i.dt_s).min(i.stability_bound_s)
-                ),
+                RunError::Unstable(i, _) => {
+                    eprintln!(
+                        "`coil resume {} --set simulation.time_step.fixed_s={:.3e}` continues it from its last frame with a smaller dt",
+                        out_dir.display(),
+                        (0.5 * i.dt_s).min(i.stability_bound_s)
+                    );
+                    if i.viscous_velocity == ViscousVelocity::FullStep {
+                        eprintln!(
+                            "`coil resume {} --set simulation.time_step.viscous_velocity=half_step` continues it at the same dt, the viscous terms reading the half-step velocity, which leap-frog keeps stable to twice the damping rate (README, Trade-off)",
+                            out_dir.display()
+                        );
+                    }
+                }
                 _ => {}
             }
             ExitCode::from(match e {

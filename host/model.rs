@@ -39,6 +39,7 @@ pub struct ParticleState<'a, R, N = Neighborhood<'a, Open>> {
     pub neighborhood: N,
     pub fluid: Fluid<R>,
     pub id: View<'a, u32>,
+    /// Velocity the viscous terms read (m/s): see `coil_kernels::leapfrog`.
     pub velocity: Vec3View<'a, R>,
     pub density: View<'a, R>,
     /// Present when the model uses stress (`Model::FIELDS`).

@@ -6,7 +6,7 @@ use crate::model::{CpuPasses, Model, ParticleState};
 use crate::neighbor_grid::NeighborGrid;
 use crate::parallel::{launch, on_worker};
 use crate::particles::{mat3_view_mut, stress_view_mut, vec3_view, vec3_view_mut, view_mut, Particles};
-use crate::scene::{DensityKernel, Scene, Walls};
+use crate::scene::{DensityKernel, Scene, ViscousVelocity, Walls};
 use crate::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, InitialParticles};
 use crate::time_step::{Limit, StabilityBound, TimeStepper};
 use coil_kernels::cell_grid::Neighbors;
@@ -33,6 +33,8 @@ pub struct Instability {
     pub runaway_speed_m_s: f64,
     pub dt_s: f64,
     pub stability_bound_s: f64,
+    /// The velocity the viscous terms read.
+    pub viscous_velocity: ViscousVelocity,
 }
 
 impl fmt::Display for Instability {
@@ -97,6 +99,8 @@ pub struct Simulation<R: Real, M: Model<R>> {
     pub wall_mirror: Option<[Vec<f64>; 3]>,
     /// The kernel of Eq. (5): which monomorphised density pass each step launches.
     pub density_kernel: DensityKernel,
+    /// Which velocity the viscous terms read.
+    pub viscous_velocity: ViscousVelocity,
 }
 
 impl<R: Real, M: Model<R>> Simulation<R, M> {
@@ -177,6 +181,7 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             wall_mirror: (scene.simulation.walls == Walls::Mirrored)
                 .then(|| [0, 1, 2].map(|a| initial.boundary_mirror.iter().map(|m| m[a]).collect())),
             density_kernel: mat.density_kernel,
+            viscous_velocity: ts.viscous_velocity,
         };
         if sim.wall_mirror.is_none() {
             sim.grid.track_fluid(fluid.boundary_count);
@@ -294,22 +299,26 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         let p = &mut self.particles;
         let n = p.len();
         if let Some(mirror) = &self.wall_mirror {
+            let velocity = match self.viscous_velocity {
+                ViscousVelocity::FullStep => &mut p.velocity,
+                ViscousVelocity::HalfStep => &mut p.velocity_half,
+            };
             let args = MirroredWallArgs {
                 neighborhood: self.grid.neighborhood(vec3_view(&p.position, n), topology),
                 fluid: self.fluid,
                 id: View::new(&p.id[..n]),
                 mirror: Vec3View::new(&mirror[0], &mirror[1], &mirror[2]),
-                velocity: vec3_view_mut(&mut p.velocity, n),
+                velocity: vec3_view_mut(velocity, n),
                 density: view_mut(&mut p.density, n),
             };
             launch(n, |i| mirrored_wall_pass(i, &args));
         }
         // Lines 9-16: velocity gradient and stress, accelerations.
-        let grid = &self.grid;
+        let (grid, read) = (&self.grid, self.viscous_velocity);
         if grid.keeps_neighbor_lists() {
-            accelerations(&self.model, self.fluid, p, |position| grid.listed_neighborhood(position, topology));
+            accelerations(&self.model, self.fluid, p, read, |position| grid.listed_neighborhood(position, topology));
         } else {
-            accelerations(&self.model, self.fluid, p, |position| grid.neighborhood(position, topology));
+            accelerations(&self.model, self.fluid, p, read, |position| grid.neighborhood(position, topology));
         }
         // Fluid inside a nozzle's tube moves with the jet (paper Sec. III-C; see `nozzle`).
         for inlet in &self.inlets {
@@ -413,6 +422,7 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
             runaway_speed_m_s: self.runaway_speed,
             dt_s: self.last_dt,
             stability_bound_s: self.stepper.bound.dt().0,
+            viscous_velocity: self.viscous_velocity,
         })
     }
 
@@ -466,19 +476,24 @@ fn density_passes<R: Real, N: Neighbors + Sync>(kernel: DensityKernel, n: usize,
 }
 
 /// The model's passes over the particles `p`, visiting neighbors through what `neighborhood`
-/// builds over their positions.
+/// builds over their positions, with the viscous terms reading the velocity `read`.
 fn accelerations<'a, R: Real, M: Model<R>, N: Neighbors + Sync>(
     model: &M,
     fluid: Fluid<R>,
     p: &'a mut Particles<R>,
+    read: ViscousVelocity,
     neighborhood: impl FnOnce(Vec3View<'a, f64>) -> N,
 ) {
     let n = p.len();
+    let velocity = match read {
+        ViscousVelocity::FullStep => &p.velocity,
+        ViscousVelocity::HalfStep => &p.velocity_half,
+    };
     let state = ParticleState {
         neighborhood: neighborhood(vec3_view(&p.position, n)),
         fluid,
         id: View::new(&p.id[..n]),
-        velocity: vec3_view(&p.velocity, n),
+        velocity: vec3_view(velocity, n),
         density: View::new(&p.density[..n]),
         stress: p.stress.as_mut().map(|s| stress_view_mut(s, n)),
         viscosity: p.viscosity.as_mut().map(|v| view_mut(v, n)),

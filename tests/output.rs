@@ -406,6 +406,7 @@ fn an_unstable_run_resumes_from_its_last_frame_with_a_smaller_dt() {
     let stderr = String::from_utf8_lossy(&r.stderr);
     assert_eq!(r.status.code(), Some(3), "{stderr}");
     assert!(stderr.contains("--set simulation.time_step.fixed_s=2.000e-4` continues it"), "the bound: {stderr}");
+    assert!(stderr.contains("--set simulation.time_step.viscous_velocity=half_step` continues it at the same dt"), "{stderr}");
     let before = run_files(&dir);
     assert_eq!(before.iter().filter(|f| f.0.starts_with("frame_")).count(), 3, "frames at 0, 0.02, 0.04 s");
     let again = common::coil(&["resume", dir.to_str().expect("utf-8"), "--quiet"]);

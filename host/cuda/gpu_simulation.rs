@@ -12,7 +12,7 @@ use super::gpu::{ByValue, CudaError, Gpu};
 use super::scan::scan_chunk_totals;
 use crate::model::{Model, ParticleState, Passes};
 use crate::particles::{ModelFields, Particles};
-use crate::scene::DensityKernel;
+use crate::scene::{DensityKernel, ViscousVelocity};
 use crate::simulation::{inject, Instability, Simulation};
 use crate::time_step::Limit;
 use coil_kernels::acceleration::{AccelerationArgs, ViscousOperator};
@@ -188,6 +188,14 @@ impl<R: Real> DeviceState<R> {
             + self.staged_id.bytes()
             + self.figures.bytes()
             + self.wall_mirror.as_ref().map_or(0, v3)
+    }
+
+    /// The velocity array the viscous terms read.
+    fn viscous_velocity(&self, read: ViscousVelocity) -> &DeviceVec3<R> {
+        match read {
+            ViscousVelocity::FullStep => &self.velocity,
+            ViscousVelocity::HalfStep => &self.velocity_half,
+        }
     }
 
     fn stress_view(&self, n: usize) -> Option<SymTensorViewMut<'static, R>> {
@@ -377,7 +385,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
             neighborhood: self.neighborhood(topology),
             fluid: self.host.fluid,
             id: d.id.view(n),
-            velocity: vec3_view(&d.velocity, n),
+            velocity: vec3_view(d.viscous_velocity(self.host.viscous_velocity), n),
             density: d.density.view(n),
             stress: d.stress_view(n),
             viscosity: d.viscosity.as_ref().map(|v| v.view_mut(n)),
@@ -609,7 +617,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
             fluid: self.host.fluid,
             id: d.id.view(n),
             mirror: vec3_view(mirror, mirror[0].len()),
-            velocity: vec3_view_mut(&d.velocity, n),
+            velocity: vec3_view_mut(d.viscous_velocity(self.host.viscous_velocity), n),
             density: d.density.view_mut(n),
         };
         let count = self.count();

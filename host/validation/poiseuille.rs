@@ -5,7 +5,7 @@
 
 use super::scene_word;
 use super::snapshot::snapshots;
-use crate::scene::{DensityKernel, Precision, Scene, ViscosityOperator, Walls};
+use crate::scene::{DensityKernel, Precision, Scene, ViscosityOperator, ViscousVelocity, Walls};
 use std::f64::consts::PI;
 
 /// Morris et al. 1997's channel: L = 1 mm, nu = 1e-6 m^2/s, F = 2e-4 m/s^2, rho0 = 1000
@@ -32,6 +32,8 @@ pub struct Channel {
     pub density_kernel: DensityKernel,
     /// Weight of the hourglass control of the paper's operator (0: none).
     pub hourglass_control: f64,
+    /// Which velocity the viscous terms read.
+    pub viscous_velocity: ViscousVelocity,
 }
 
 /// The Cross model, Eq. (3), by its constants.
@@ -66,6 +68,7 @@ impl Channel {
             safety_factor: 1.0,
             density_kernel: DensityKernel::Poly6,
             hourglass_control: 0.0,
+            viscous_velocity: ViscousVelocity::FullStep,
         }
     }
 
@@ -85,7 +88,7 @@ impl Channel {
         let s = self.spacing();
         let (l, w) = (self.gap_m, 6.0 * s);
         let (operator, precision, walls) = (scene_word(self.operator), scene_word(self.precision), scene_word(self.walls));
-        let density_kernel = scene_word(self.density_kernel);
+        let (density_kernel, viscous_velocity) = (scene_word(self.density_kernel), scene_word(self.viscous_velocity));
         let cross = self
             .cross
             .map(|c| format!("nu_inf_m2_s = {:e}\ncross_k_s = {:e}\ncross_n = {:e}\n", c.nu_inf_m2_s, c.k_s, c.n))
@@ -113,7 +116,7 @@ periodic = [true, false, true]
 end_time_s = {end_time_s:e}
 precision = "{precision}"
 walls = "{walls}"
-time_step = {{ safety_factor = {sf:e}, allow_above_stability_bound = {above} }}
+time_step = {{ safety_factor = {sf:e}, allow_above_stability_bound = {above}, viscous_velocity = "{viscous_velocity}" }}
 [[boundary]]
 shape = "box"
 min_m = [0.0, 0.0, 0.0]

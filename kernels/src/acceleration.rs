@@ -81,7 +81,7 @@ impl<R: Real> ViscousOperator<R> for StressDivergence<'_, R> {
 pub struct VelocityLaplacian<'a, R> {
     /// nu0 (m^2/s).
     pub nu0: R,
-    /// Velocity at the current full step (m/s).
+    /// Velocity the viscous terms read (m/s): see `leapfrog`.
     pub velocity: Vec3View<'a, R>,
 }
 
@@ -147,7 +147,7 @@ impl<R: Real> ParticleViscosity<R> for View<'_, R> {
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct MorrisViscosity<'a, R, Nu> {
-    /// Velocity at the current full step (m/s).
+    /// Velocity the viscous terms read (m/s): see `leapfrog`.
     pub velocity: Vec3View<'a, R>,
     /// Kinematic viscosity (m^2/s).
     pub viscosity: Nu,

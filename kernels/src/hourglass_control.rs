@@ -30,7 +30,7 @@ pub struct VelocityGradientArgs<'a, R, Rh, N = Neighborhood<'a, Open>> {
     pub neighborhood: N,
     pub fluid: Fluid<R>,
     pub rheology: Rh,
-    /// Velocity at the current full step (m/s).
+    /// Velocity the viscous terms read (m/s): see `leapfrog`.
     pub velocity: Vec3View<'a, R>,
     pub density: View<'a, R>,
     /// grad v, Eq. (8) (1/s).
@@ -62,7 +62,7 @@ pub fn velocity_gradient_pass<R: Real, Rh: Rheology<R>, N: Neighbors>(i: usize, 
 pub struct HourglassControlledStress<'a, R> {
     /// The control's weight against Morris's Laplacian (dimensionless; 0 is the paper's operator).
     pub coefficient: R,
-    /// Velocity at the current full step (m/s).
+    /// Velocity the viscous terms read (m/s): see `leapfrog`.
     pub velocity: Vec3View<'a, R>,
     /// grad v (1/s), from [`velocity_gradient_pass`].
     pub gradient: Mat3View<'a, R>,

@@ -115,7 +115,8 @@ pub struct MirroredWallArgs<'a, R, T = Open> {
     /// Each wall particle's mirror image through the wall surface it belongs to (m), indexed by
     /// id (wall particles never move, so this needs no reordering).
     pub mirror: Vec3View<'a, f64>,
-    /// Velocity at the current full step (m/s): fluid entries are read, wall entries written.
+    /// Velocity the viscous terms read (m/s; see `leapfrog`): fluid entries are read, wall
+    /// entries written.
     pub velocity: Vec3ViewMut<'a, R>,
     /// Density (kg/m^3) after the density pass: fluid entries are read; wall entries are
     /// written as the density whose Eq. (6) pressure is the wall's.

@@ -20,7 +20,7 @@ pub struct ShearViscosityArgs<'a, R, Rh, N = Neighborhood<'a, Open>> {
     pub neighborhood: N,
     pub fluid: Fluid<R>,
     pub rheology: Rh,
-    /// Velocity at the current full step (m/s).
+    /// Velocity the viscous terms read (m/s): see `leapfrog`.
     pub velocity: Vec3View<'a, R>,
     pub density: View<'a, R>,
     /// Kinematic viscosity nu(D) (m^2/s).

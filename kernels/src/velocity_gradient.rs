@@ -59,7 +59,7 @@ pub struct StressArgs<'a, R, Rh, N = Neighborhood<'a, Open>> {
     pub neighborhood: N,
     pub fluid: Fluid<R>,
     pub rheology: Rh,
-    /// Velocity at the current full step (m/s).
+    /// Velocity the viscous terms read (m/s): see `leapfrog`.
     pub velocity: Vec3View<'a, R>,
     pub density: View<'a, R>,
     pub stress: SymTensorViewMut<'a, R>,
