@@ -25,8 +25,8 @@ pub struct LeapfrogArgs<'a, R, T = Open> {
     pub position: Vec3ViewMut<'a, f64>,
     /// v at the half step, v_{n-1/2} in, v_{n+1/2} out (m/s).
     pub velocity_half: Vec3ViewMut<'a, R>,
-    /// v at the full step n+1 as v_{n+1/2} + a_n dt / 2 (m/s), which the frames and the guard
-    /// read.
+    /// v at the full step n+1 as v_{n+1/2} + a_n dt / 2 (m/s), which the frames, the guard and,
+    /// by default, the viscous terms of the next step read.
     pub velocity: Vec3ViewMut<'a, R>,
 }
 
