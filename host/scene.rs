@@ -278,8 +278,9 @@ pub struct TimeStep {
     /// operator stays stable is measured, not guaranteed; the guard stops a run that blows up).
     #[serde(default)]
     pub allow_above_stability_bound: bool,
-    /// Which velocity the viscous terms read.
-    #[serde(default)]
+    /// Which velocity the viscous terms read. Left out of the resolved scene at its default,
+    /// so that checkpoints taken before the field existed keep their fingerprint.
+    #[serde(default, skip_serializing_if = "ViscousVelocity::is_full_step")]
     pub viscous_velocity: ViscousVelocity,
 }
 
@@ -307,6 +308,12 @@ pub enum ViscousVelocity {
     /// lambda dt < 2, which keeps two particles closing in a thinned jet stable at the
     /// Eq. (10) bound (README, Trade-off).
     HalfStep,
+}
+
+impl ViscousVelocity {
+    fn is_full_step(&self) -> bool {
+        *self == ViscousVelocity::FullStep
+    }
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]

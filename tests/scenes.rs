@@ -509,3 +509,16 @@ fn a_fluid_cylinder_fills_its_volume_and_a_bad_one_is_named() {
         assert!(e.file == "cylinder.toml" && e.field == field, "{to}: {e}");
     }
 }
+
+/// A checkpoint resumes only the scene whose fingerprint it holds, a hash of the resolved scene
+/// with its time step at the default: that default must serialise as it did before
+/// `viscous_velocity` existed, or every checkpoint taken before would be refused.
+#[test]
+fn the_default_time_step_serialises_as_before_viscous_velocity_existed() {
+    use coil::scene::{TimeStep, ViscousVelocity};
+    let json = serde_json::to_string(&TimeStep::default()).expect("serialises");
+    assert_eq!(json, r#"{"safety_factor":1.0,"fixed_s":null,"allow_above_stability_bound":false}"#);
+    let half = TimeStep { viscous_velocity: ViscousVelocity::HalfStep, ..TimeStep::default() };
+    let json = serde_json::to_string(&half).expect("serialises");
+    assert!(json.contains(r#""viscous_velocity":"half_step""#), "{json}");
+}
