@@ -2,6 +2,7 @@
 //! 64K fluid particles, f32 and f64, with the paper's operator (Cross, K = 1) and with the
 //! Newtonian Laplacian operator, h = 2 x spacing.
 
+use coil::simulation::backend::Backend as _;
 use coil::model::{cross_law, LaplacianModel, Model, StressModel};
 use coil::scene::Scene;
 use coil::setup::initial_particles;
@@ -31,12 +32,12 @@ fn bench_variant<R: Real, M: Model<R>>(c: &mut Criterion, label: &str, model: im
         for _ in 0..20 {
             sim.step().expect("stable");
         }
-        let fluid = sim.fluid_count();
+        let fluid = sim.run.fluid_count();
         eprintln!(
             "{label} {}: {fluid} fluid + {} boundary particles, {:.1} MiB",
             R::NAME,
-            sim.boundary_count(),
-            sim.memory_bytes() as f64 / (1 << 20) as f64
+            sim.run.boundary_count(),
+            sim.backend.memory_bytes() as f64 / (1 << 20) as f64
         );
         group.throughput(Throughput::Elements(fluid as u64));
         group.bench_function(BenchmarkId::from_parameter(format!("{}K", (fluid + 500) / 1000)), |b| {

@@ -7,11 +7,12 @@
 
 use crate::model::{with_precision_and_model, Model, ModelFields, WithModel};
 use crate::operation_count::{count_step_operations, StepOperations};
-use crate::run::{Device, StepStop, Stepping};
+use crate::run::Device;
 use crate::scene::{Precision, Scene};
 use crate::scene_override::{apply, Override};
 use crate::setup::{initial_particles, InitialParticles};
-use crate::simulation::Simulation;
+use crate::simulation::backend::Backend;
+use crate::simulation::{RunState, Setup, Simulation, StepError};
 use crate::statistics::Sorted;
 use coil_kernels::Real;
 use std::time::Instant;
@@ -181,12 +182,31 @@ fn percentiles(times: Vec<f64>) -> (f64, f64, f64) {
     (sorted.median(), sorted.quantile(0.1), sorted.quantile(0.9))
 }
 
-fn step<R: Real, M: Model<R>, S: Stepping<R, M>>(state: &mut S) -> Result<(), String> {
-    let (dt, limit) = state.sim().next_dt();
-    state.step_with(dt, limit).map_err(|stop| match stop {
-        StepStop::Unstable(i) => format!("the dam break went unstable: {i}"),
-        StepStop::Device(e) => e,
+fn step<R: Real, M: Model<R>, B: Backend<R>>(sim: &mut Simulation<R, M, B>) -> Result<(), String> {
+    sim.step().map_err(|stop| match stop {
+        StepError::Unstable(i) => format!("the dam break went unstable: {i}"),
+        StepError::Backend(e) => e.to_string(),
     })
+}
+
+/// A measurement of the run `run` with `memory_bytes` of particle memory, before timing.
+fn untimed<R: Real, M: Model<R>>(run: &RunState<R, M>, memory_bytes: usize, m: &Measure) -> Measurement {
+    Measurement {
+        size: m.size,
+        fluid: run.fluid_count(),
+        boundary: run.boundary_count(),
+        precision: m.precision,
+        backend: BenchBackend::Cpu,
+        steps: m.steps,
+        median_ms: 0.0,
+        p10_ms: 0.0,
+        p90_ms: 0.0,
+        bytes_per_fluid_particle: memory_bytes as f64 / run.fluid_count() as f64,
+        kernels: Vec::new(),
+        memory_floor_ms: None,
+        operations: None,
+        arithmetic_floor_ms: None,
+    }
 }
 
 /// Times one configuration; `gpu` is taken for a CUDA measurement and handed back.
@@ -205,26 +225,13 @@ struct Measure<'a> {
 
 impl WithModel for Measure<'_> {
     type Output = (Result<Measurement, String>, Option<Device>);
-    fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
-        let mut sim = Simulation::<R, M>::for_backend(self.scene, self.initial, model, self.gpu.is_some());
-        let blank = Measurement {
-            size: self.size,
-            fluid: sim.fluid_count(),
-            boundary: sim.boundary_count(),
-            precision: self.precision,
-            backend: BenchBackend::Cpu,
-            steps: self.steps,
-            median_ms: 0.0,
-            p10_ms: 0.0,
-            p90_ms: 0.0,
-            bytes_per_fluid_particle: sim.memory_bytes() as f64 / sim.fluid_count() as f64,
-            kernels: Vec::new(),
-            memory_floor_ms: None,
-            operations: None,
-            arithmetic_floor_ms: None,
-        };
-        match self.gpu {
+    fn with<R: Real, M: Model<R>>(mut self, model: M) -> Self::Output {
+        let setup = Setup::<R, M>::new(self.scene, self.initial, model);
+        match self.gpu.take() {
             None => {
+                let mut sim = Simulation::on_cpu(setup, true);
+                let Ok(()) = sim.sort_and_density();
+                let blank = untimed(&sim.run, sim.backend.memory_bytes(), &self);
                 let timed = (|| {
                     for _ in 0..self.options.warmup {
                         step(&mut sim)?;
@@ -244,7 +251,7 @@ impl WithModel for Measure<'_> {
                 (result, None)
             }
             #[cfg(feature = "cuda")]
-            Some(gpu) => gpu_measurement(sim, gpu, blank, self.options, self.bandwidth),
+            Some(gpu) => gpu_measurement(setup, gpu, &self),
             #[cfg(not(feature = "cuda"))]
             Some(d) => match d {},
         }
@@ -253,41 +260,45 @@ impl WithModel for Measure<'_> {
 
 #[cfg(feature = "cuda")]
 fn gpu_measurement<R: Real, M: Model<R>>(
-    sim: Simulation<R, M>,
+    setup: Setup<R, M>,
     gpu: crate::cuda::Gpu,
-    blank: Measurement,
-    options: &BenchOptions,
-    bandwidth: Option<f64>,
+    measure: &Measure,
 ) -> (Result<Measurement, String>, Option<Device>) {
     use crate::cuda::GpuSimulation;
-    let particles = sim.particles.len();
-    let cells = sim.grid.grid.cell_count() as f64;
-    let mut state = match GpuSimulation::new(sim, gpu) {
+    let (options, bandwidth) = (measure.options, measure.bandwidth);
+    let particles = setup.host.particles.len();
+    let cells = setup.host.grid.grid.cell_count() as f64;
+    let mut state = match GpuSimulation::on_gpu(setup, gpu) {
         Ok(s) => s,
         Err(e) => return (Err(e.to_string()), None),
     };
-    let bytes = state.device_bytes() as f64;
+    if let Err(e) = state.sort_and_density() {
+        return (Err(e.to_string()), Some(state.backend.into_gpu()));
+    }
+    let bytes = state.backend.memory_bytes() as f64;
+    let blank = untimed(&state.run, 0, measure);
     let timed = (|| -> Result<Measurement, String> {
         for _ in 0..options.warmup {
             step(&mut state)?;
         }
         let err = |e: crate::cuda::CudaError| e.to_string();
         let mut marks = Vec::with_capacity(blank.steps + 1);
-        marks.push(state.gpu().mark().map_err(err)?);
+        marks.push(state.backend.gpu().mark().map_err(err)?);
         for _ in 0..blank.steps {
             step(&mut state)?;
-            marks.push(state.gpu().mark().map_err(err)?);
+            marks.push(state.backend.gpu().mark().map_err(err)?);
         }
         let mut times = Vec::with_capacity(blank.steps);
         for w in marks.windows(2) {
-            times.push(state.gpu().elapsed_ms(&w[0], &w[1]).map_err(err)?);
+            times.push(state.backend.gpu().elapsed_ms(&w[0], &w[1]).map_err(err)?);
         }
-        state.gpu().start_profile();
+        state.backend.gpu().start_profile();
         for _ in 0..options.profile_steps {
             step(&mut state)?;
         }
         let per_step = 1.0 / options.profile_steps.max(1) as f64;
         let kernels = state
+            .backend
             .gpu()
             .finish_profile()
             .map_err(err)?
@@ -311,7 +322,7 @@ fn gpu_measurement<R: Real, M: Model<R>>(
             ..blank
         })
     })();
-    (timed, Some(state.into_gpu()))
+    (timed, Some(state.backend.into_gpu()))
 }
 
 /// Bytes a step must move between the GPU and its memory, however well the kernels use the

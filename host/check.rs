@@ -5,6 +5,9 @@ use crate::inlet::Inlet;
 use crate::model::{with_precision_and_model, Model, WithModel};
 use crate::scene::{Boundary, Domain, FluidBlock, Precision, Scene, SceneError};
 use crate::setup::{fastest_start_speed, initial_particles, InitialParticles};
+use crate::simulation::backend::Backend as _;
+#[cfg(feature = "cuda")]
+use crate::simulation::Setup;
 use crate::simulation::Simulation;
 use crate::time_step::{Limit, StabilityBound, TimeStepper};
 use coil_kernels::Real;
@@ -163,11 +166,11 @@ impl WithModel for Calibrate<'_> {
         let started = Instant::now();
         let mut particle_steps = 0.0;
         // Stop at the first instability too: a scene's cost is still worth reporting.
-        while (sim.steps < 5 || started.elapsed() < self.wall) && sim.steps < 10_000 && sim.step().is_ok() {
-            particle_steps += sim.particles.len() as f64;
+        while (sim.run.steps < 5 || started.elapsed() < self.wall) && sim.run.steps < 10_000 && sim.step().is_ok() {
+            particle_steps += sim.particles().len() as f64;
         }
         let seconds = started.elapsed().as_secs_f64();
-        (if particle_steps > 0.0 { seconds / particle_steps } else { 0.0 }, sim.steps)
+        (if particle_steps > 0.0 { seconds / particle_steps } else { 0.0 }, sim.run.steps)
     }
 }
 
@@ -189,13 +192,15 @@ impl WithModel for Plan<'_> {
     type Output = RunPlan;
     fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
         let sim = Simulation::<R, M>::new(self.scene, self.initial, model);
+        let run = &sim.run;
         let (inlets, fluid_capacity, stepper, memory_bytes) =
-            (sim.inlets().to_vec(), sim.fluid_capacity(), sim.stepper, sim.memory_bytes());
+            (run.inlets().to_vec(), run.fluid_capacity(), run.stepper, sim.backend.memory_bytes());
         // Counted by allocating it on the emulated device, whose memory is the host's: the
         // figure `coil run --backend cuda` prints, with no GPU needed.
         #[cfg(feature = "cuda")]
-        let device_memory_bytes =
-            crate::cuda::GpuSimulation::new(sim, crate::cuda::Gpu::emulated()).ok().map(|g| g.device_bytes());
+        let device_memory_bytes = crate::cuda::GpuSimulation::on_gpu(Setup::new(self.scene, self.initial, model), crate::cuda::Gpu::emulated())
+            .ok()
+            .map(|g| g.backend.memory_bytes());
         #[cfg(not(feature = "cuda"))]
         let device_memory_bytes = None;
         RunPlan { inlets, fluid_capacity, stepper, memory_bytes, device_memory_bytes }

@@ -16,7 +16,8 @@
 use crate::model::Model;
 use crate::run::Tally;
 use crate::scene::Scene;
-use crate::simulation::{Diagnostics, Simulation};
+use crate::particles::Particles;
+use crate::simulation::{Diagnostics, RunState, Setup};
 use crate::time_step::Limit;
 use coil_kernels::Real;
 use std::path::Path;
@@ -162,10 +163,10 @@ pub struct Checkpoint {
     bytes: Vec<u8>,
 }
 
-/// The checkpoint of `sim` (its host particles current) with the drive's `tally`, as bytes.
-pub fn encode<R: Real, M: Model<R>>(sim: &Simulation<R, M>, scene: &Scene, tally: &Tally) -> Vec<u8> {
+/// The checkpoint of the run `sim` with its particles `p` (current on the host) and the drive's
+/// `tally`, as bytes.
+pub fn encode<R: Real, M: Model<R>>(sim: &RunState<R, M>, p: &Particles<R>, scene: &Scene, tally: &Tally) -> Vec<u8> {
     let diagnostics = &sim.diagnostics;
-    let p = &sim.particles;
     let n = p.len();
     let mut w = Writer(Vec::with_capacity(256 + n * (24 + 7 * std::mem::size_of::<R>() + 4)));
     w.0.extend_from_slice(MAGIC);
@@ -219,8 +220,14 @@ pub fn encode<R: Real, M: Model<R>>(sim: &Simulation<R, M>, scene: &Scene, tally
 
 /// Writes the checkpoint (see [`encode`]) to `dir` through a temporary name, so the one there
 /// is always whole.
-pub fn write<R: Real, M: Model<R>>(dir: &Path, sim: &Simulation<R, M>, scene: &Scene, tally: &Tally) -> std::io::Result<()> {
-    crate::output::write_atomically(&dir.join(FILE_NAME), &encode(sim, scene, tally))
+pub fn write<R: Real, M: Model<R>>(
+    dir: &Path,
+    sim: &RunState<R, M>,
+    p: &Particles<R>,
+    scene: &Scene,
+    tally: &Tally,
+) -> std::io::Result<()> {
+    crate::output::write_atomically(&dir.join(FILE_NAME), &encode(sim, p, scene, tally))
 }
 
 impl Checkpoint {
@@ -307,19 +314,20 @@ impl Checkpoint {
         })
     }
 
-    /// Puts the checkpoint's state into `sim`, a run just set up from the scene it was taken
+    /// Puts the checkpoint's state into `setup`, a run just set up from the scene it was taken
     /// from (the caller has compared fingerprints). The error names what does not fit.
-    pub fn restore<R: Real, M: Model<R>>(&self, sim: &mut Simulation<R, M>) -> Result<(), String> {
+    pub fn restore<R: Real, M: Model<R>>(&self, setup: &mut Setup<R, M>) -> Result<(), String> {
+        let (sim, p) = (&mut setup.run, &mut setup.host.particles);
         if self.real_bytes != std::mem::size_of::<R>() {
             return Err(format!("holds {}-byte reals, and the run is {}", self.real_bytes, R::NAME));
         }
         let boundary = sim.boundary_count();
-        if self.particles > sim.particles.capacity() || self.fluid_count + boundary != self.particles {
+        if self.particles > p.capacity() || self.fluid_count + boundary != self.particles {
             return Err(format!(
                 "holds {} particles ({} fluid) where the scene has {boundary} wall particles and room for {} in all",
                 self.particles,
                 self.fluid_count,
-                sim.particles.capacity()
+                p.capacity()
             ));
         }
         if self.inlets.len() != sim.inlets().len() {
@@ -336,7 +344,6 @@ impl Checkpoint {
             4 => R::from_f64(f32::from_le_bytes(b.try_into().expect("4 bytes")) as f64),
             _ => R::from_f64(f64::from_le_bytes(b.try_into().expect("8 bytes"))),
         };
-        let p = &mut sim.particles;
         p.set_len(n);
         for a in 0..3 {
             for (x, b) in p.position[a][..n].iter_mut().zip(next(8 * n).chunks_exact(8)) {

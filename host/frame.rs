@@ -3,8 +3,8 @@
 use crate::model::Model;
 use crate::output::points::{encode_ply, encode_xyz};
 use crate::output::vtu::{encode, Field};
-use crate::particles::vec3_view;
-use crate::simulation::Simulation;
+use crate::particles::{vec3_view, HostParticles};
+use crate::simulation::RunState;
 use coil_kernels::density::pressure;
 use coil_kernels::velocity_gradient::{rate_of_deformation, shear_rate, velocity_gradient};
 use coil_kernels::view::View;
@@ -30,13 +30,13 @@ pub struct Frame {
 }
 
 impl Frame {
-    /// Reads the fluid particles of `sim`, computing shear rate (Eq. 8, 2) and viscosity
-    /// (Eq. 3) with the kernels' own functions.
-    pub fn capture<R: Real, M: Model<R>>(&mut self, sim: &Simulation<R, M>) {
-        let p = &sim.particles;
+    /// Reads the fluid particles `host` of the run `run`, computing shear rate (Eq. 8, 2) and
+    /// viscosity (Eq. 3) with the kernels' own functions.
+    pub fn capture<R: Real, M: Model<R>>(&mut self, run: &RunState<R, M>, host: &HostParticles<R>) {
+        let p = &host.particles;
         let n = p.len();
-        let fluid = sim.fluid;
-        let neighborhood = sim.neighborhood();
+        let fluid = run.fluid;
+        let neighborhood = host.neighborhood();
         let velocity = vec3_view(&p.velocity, n);
         let density = View::new(&p.density[..n]);
         self.all_shear_rate.resize(n, 0.0);
@@ -65,7 +65,7 @@ impl Frame {
             self.velocity.push([0, 1, 2].map(|a| p.velocity[a][i].to_f64() as f32));
             self.density.push(rho.to_f64() as f32);
             self.pressure.push(pressure(rho, &fluid).to_f64() as f32);
-            self.viscosity.push(sim.model.viscosity(R::from_f64(d as f64)).to_f64() as f32);
+            self.viscosity.push(run.model.viscosity(R::from_f64(d as f64)).to_f64() as f32);
             self.shear_rate.push(d);
             self.id.push(p.id[i]);
         }

@@ -3,6 +3,7 @@ pub use coil_kernels as kernels;
 pub mod bench;
 pub mod bench_report;
 pub mod check;
+pub mod cpu;
 pub mod checkpoint;
 #[cfg(feature = "cuda")]
 pub mod cuda;

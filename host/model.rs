@@ -4,19 +4,17 @@
 //! particle. Each is a type, so the CPU loops and the GPU kernels of a run contain only the
 //! physics it uses.
 
-use crate::parallel::launch;
 pub use crate::particles::ModelFields;
+use crate::simulation::backend::Passes;
 use crate::scene::{Precision, Scene, Viscosity, ViscosityOperator};
-use coil_kernels::acceleration::{
-    acceleration_pass, AccelerationArgs, MorrisViscosity, StressDivergence, VelocityLaplacian, ViscousOperator,
-};
+use coil_kernels::acceleration::{AccelerationArgs, MorrisViscosity, StressDivergence, VelocityLaplacian, ViscousOperator};
 use coil_kernels::cell_grid::{Neighborhood, Neighbors};
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
-use coil_kernels::hourglass_control::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
-use coil_kernels::shear_viscosity::{shear_viscosity_pass, ShearViscosityArgs};
-use coil_kernels::topology::Open;
-use coil_kernels::velocity_gradient::{stress_pass, StressArgs};
+use coil_kernels::hourglass_control::{HourglassControlledStress, VelocityGradientArgs};
+use coil_kernels::shear_viscosity::ShearViscosityArgs;
+use coil_kernels::topology::{Open, Topology};
+use coil_kernels::velocity_gradient::StressArgs;
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::Real;
 
@@ -30,7 +28,7 @@ pub trait Model<R: Real>: Copy + Send + Sync + 'static {
     fn max_viscosity(&self) -> R;
     /// Velocity gradient and stress (when used), then accelerations, for all particles of
     /// `state`, run by `backend`, visiting neighbors through `N`.
-    fn accelerations<N: Neighbors, B: Passes<R, N>>(&self, backend: &mut B, state: ParticleState<'_, R, N>);
+    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, state: ParticleState<'_, R, N>);
 }
 
 /// What the acceleration passes read and write, as views a backend built over its own memory.
@@ -62,35 +60,6 @@ impl<'a, R: Real, N: Neighbors> ParticleState<'a, R, N> {
             density: self.density,
             acceleration: self.acceleration,
         }
-    }
-}
-
-/// A backend's way of running the kernels whose arguments depend on the model, with neighbors
-/// visited through `N`.
-pub trait Passes<R: Real, N: Neighbors> {
-    fn stress<Rh: Rheology<R>>(&mut self, args: StressArgs<'_, R, Rh, N>);
-    fn shear_viscosity<Rh: Rheology<R>>(&mut self, args: ShearViscosityArgs<'_, R, Rh, N>);
-    fn velocity_gradient<Rh: Rheology<R>>(&mut self, args: VelocityGradientArgs<'_, R, Rh, N>);
-    fn acceleration<Op: ViscousOperator<R>>(&mut self, args: AccelerationArgs<'_, R, Op, N>);
-}
-
-/// The CPU backend's passes: each kernel function over `n` particles with rayon.
-pub struct CpuPasses {
-    pub n: usize,
-}
-
-impl<R: Real, N: Neighbors + Sync> Passes<R, N> for CpuPasses {
-    fn stress<Rh: Rheology<R>>(&mut self, args: StressArgs<'_, R, Rh, N>) {
-        launch(self.n, |i| stress_pass(i, &args));
-    }
-    fn shear_viscosity<Rh: Rheology<R>>(&mut self, args: ShearViscosityArgs<'_, R, Rh, N>) {
-        launch(self.n, |i| shear_viscosity_pass(i, &args));
-    }
-    fn velocity_gradient<Rh: Rheology<R>>(&mut self, args: VelocityGradientArgs<'_, R, Rh, N>) {
-        launch(self.n, |i| velocity_gradient_pass(i, &args));
-    }
-    fn acceleration<Op: ViscousOperator<R>>(&mut self, args: AccelerationArgs<'_, R, Op, N>) {
-        launch(self.n, |i| acceleration_pass(i, &args));
     }
 }
 
@@ -171,7 +140,7 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for StressModel<Rh> {
     fn max_viscosity(&self) -> R {
         self.0.max_viscosity()
     }
-    fn accelerations<N: Neighbors, B: Passes<R, N>>(&self, backend: &mut B, s: ParticleState<'_, R, N>) {
+    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
         let stress = s.stress.expect("the stress operator allocates stress");
         backend.stress(StressArgs {
             neighborhood: s.neighborhood,
@@ -193,7 +162,7 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for HourglassStressModel<Rh, R
     fn max_viscosity(&self) -> R {
         self.rheology.max_viscosity()
     }
-    fn accelerations<N: Neighbors, B: Passes<R, N>>(&self, backend: &mut B, s: ParticleState<'_, R, N>) {
+    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
         let gradient = s.velocity_gradient.expect("hourglass control allocates the velocity gradient");
         let viscosity = s.viscosity.expect("hourglass control allocates viscosity");
         backend.velocity_gradient(VelocityGradientArgs {
@@ -222,7 +191,7 @@ impl<R: Real> Model<R> for LaplacianModel<R> {
     fn max_viscosity(&self) -> R {
         self.0.max_viscosity()
     }
-    fn accelerations<N: Neighbors, B: Passes<R, N>>(&self, backend: &mut B, s: ParticleState<'_, R, N>) {
+    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
         backend.acceleration(s.acceleration_args(VelocityLaplacian { nu0: self.0.nu0, velocity: s.velocity }));
     }
 }
@@ -235,7 +204,7 @@ impl<R: Real> Model<R> for MorrisModel<R> {
     fn max_viscosity(&self) -> R {
         self.0.max_viscosity()
     }
-    fn accelerations<N: Neighbors, B: Passes<R, N>>(&self, backend: &mut B, s: ParticleState<'_, R, N>) {
+    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
         backend.acceleration(s.acceleration_args(MorrisViscosity { velocity: s.velocity, viscosity: self.0 }));
     }
 }
@@ -248,7 +217,7 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for ShearThinningMorrisModel<R
     fn max_viscosity(&self) -> R {
         self.0.max_viscosity()
     }
-    fn accelerations<N: Neighbors, B: Passes<R, N>>(&self, backend: &mut B, s: ParticleState<'_, R, N>) {
+    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
         let viscosity = s.viscosity.expect("the shear-thinning Morris operator allocates viscosity");
         backend.shear_viscosity(ShearViscosityArgs {
             neighborhood: s.neighborhood,

@@ -172,3 +172,19 @@ pub fn mat3_view_mut<R: Copy>(m: &mut [[Vec<R>; 3]; 3], n: usize) -> Mat3ViewMut
     let [x, y, z] = m;
     Mat3ViewMut { rows: [vec3_view_mut(x, n), vec3_view_mut(y, n), vec3_view_mut(z, n)] }
 }
+
+/// Particles in host memory with their neighbor grid: the CPU backend's state, and a device
+/// backend's copy of its particles for output.
+pub struct HostParticles<R> {
+    pub particles: Particles<R>,
+    pub grid: crate::neighbor_grid::NeighborGrid,
+}
+
+impl<R: Real> HostParticles<R> {
+    /// The neighbor grid of the particles' current order (valid after a step), with the
+    /// domain's periods (none for an open domain). For output and checks; a step's own passes
+    /// take the open or periodic loop by type.
+    pub fn neighborhood(&self) -> coil_kernels::cell_grid::Neighborhood<'_, coil_kernels::topology::Periodic> {
+        self.grid.neighborhood(self.particles.position_view(), self.grid.periodic)
+    }
+}

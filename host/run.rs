@@ -11,8 +11,9 @@ use crate::preview::{own_range, render, speeds, Coloring, View};
 use crate::run_log::{resolved, Resumed, RunLog};
 use crate::scene::{FrameFormat, Precision, Scene, SceneError};
 use crate::setup::{initial_particles, InitialParticles};
-use crate::simulation::{Instability, Simulation};
-use crate::time_step::Limit;
+use crate::particles::HostParticles;
+use crate::simulation::backend::Backend as StepBackend;
+use crate::simulation::{Instability, RunState, Setup, Simulation, StepError};
 use coil_kernels::Real;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt;
@@ -394,11 +395,11 @@ struct Drive<'a> {
 impl WithModel for Drive<'_> {
     type Output = Result<Summary, RunError>;
     fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
-        let mut sim = Simulation::<R, M>::for_backend(self.scene, self.initial, model, self.device.is_some());
+        let mut setup = Setup::<R, M>::new(self.scene, self.initial, model);
         let tally = match self.checkpoint {
             None => None,
             Some(c) => {
-                c.restore(&mut sim).map_err(|reason| {
+                c.restore(&mut setup).map_err(|reason| {
                     RunError::Scene(SceneError {
                         file: self.options.out_dir.join(checkpoint::FILE_NAME).display().to_string(),
                         field: "(file)".into(),
@@ -408,96 +409,38 @@ impl WithModel for Drive<'_> {
                 Some(c.tally.clone())
             }
         };
+        let fresh = tally.is_none();
         match self.device {
-            // The whole loop on a worker: a step then hands no job to the pool from outside.
-            None => on_worker(|| drive(sim, self.scene, self.initial, self.options, tally)),
+            None => {
+                let mut sim = Simulation::on_cpu(setup, true);
+                if fresh {
+                    let Ok(()) = sim.sort_and_density();
+                }
+                // The whole loop on a worker: a step then hands no job to the pool from outside.
+                on_worker(|| drive(sim, self.scene, self.initial, self.options, tally))
+            }
             #[cfg(feature = "cuda")]
             Some(gpu) => {
-                let sim = crate::cuda::GpuSimulation::new(sim, gpu).map_err(|e| match e {
-                    // f32 state takes about two thirds of f64's (the README's memory table).
+                let backend_error = |e: crate::cuda::CudaError| match e {
+                    // f32 state takes about two thirds of f64's (docs/benchmark.md's memory table).
                     crate::cuda::CudaError::OutOfMemory { .. } if R::NAME == "f64" => {
                         RunError::Backend(format!("{e}, or run --precision f32 (about two thirds of the memory)"))
                     }
                     e => RunError::Backend(e.to_string()),
-                })?;
+                };
+                let mut sim = crate::cuda::GpuSimulation::on_gpu(setup, gpu).map_err(backend_error)?;
+                if fresh {
+                    sim.sort_and_density().map_err(backend_error)?;
+                }
                 if !self.options.quiet {
-                    let bytes = sim.device_bytes();
-                    let per_particle = bytes / sim.host.particles.capacity().max(1);
+                    let bytes = sim.backend.memory_bytes();
+                    let per_particle = bytes / sim.particles().capacity().max(1);
                     eprintln!("device memory: {:.1} MiB ({per_particle} B per particle)", bytes as f64 / (1 << 20) as f64);
                 }
                 drive(sim, self.scene, self.initial, self.options, tally)
             }
             #[cfg(not(feature = "cuda"))]
             Some(d) => match d {},
-        }
-    }
-}
-
-/// Why a step stopped the run.
-pub enum StepStop {
-    Unstable(Instability),
-    /// The device failed.
-    Device(String),
-}
-
-/// A run's state as the time loop drives it, on whichever backend holds it.
-pub trait Stepping<R: Real, M: Model<R>> {
-    /// The host's view of the run; its particles are current after `sync`.
-    fn sim(&self) -> &Simulation<R, M>;
-    fn step_with(&mut self, dt: f64, limit: Limit) -> Result<(), StepStop>;
-    /// Brings the host's particles up to date and checks them (before frames, at the end).
-    fn sync(&mut self) -> Result<(), StepStop>;
-    /// Particles the last step moved, boundary included.
-    fn particle_count(&self) -> usize;
-    /// Whether the host knows all the state the next step reads (a device's figures and
-    /// counts come back every few steps): where a stop may checkpoint the run, so that it
-    /// resumes as if it had never stopped.
-    fn settled(&self) -> bool;
-}
-
-impl<R: Real, M: Model<R>> Stepping<R, M> for Simulation<R, M> {
-    fn sim(&self) -> &Simulation<R, M> {
-        self
-    }
-    fn step_with(&mut self, dt: f64, limit: Limit) -> Result<(), StepStop> {
-        Simulation::step_with(self, dt, limit).map_err(StepStop::Unstable)
-    }
-    fn sync(&mut self) -> Result<(), StepStop> {
-        Ok(())
-    }
-    fn particle_count(&self) -> usize {
-        self.particles.len()
-    }
-    fn settled(&self) -> bool {
-        true
-    }
-}
-
-#[cfg(feature = "cuda")]
-impl<R: Real, M: Model<R>> Stepping<R, M> for crate::cuda::GpuSimulation<R, M> {
-    fn sim(&self) -> &Simulation<R, M> {
-        &self.host
-    }
-    fn step_with(&mut self, dt: f64, limit: Limit) -> Result<(), StepStop> {
-        crate::cuda::GpuSimulation::step_with(self, dt, limit).map_err(StepStop::from)
-    }
-    fn sync(&mut self) -> Result<(), StepStop> {
-        self.download().map_err(StepStop::from)
-    }
-    fn particle_count(&self) -> usize {
-        self.particle_bound()
-    }
-    fn settled(&self) -> bool {
-        self.host.steps.is_multiple_of(self.check_every)
-    }
-}
-
-#[cfg(feature = "cuda")]
-impl From<crate::cuda::GpuStepError> for StepStop {
-    fn from(e: crate::cuda::GpuStepError) -> Self {
-        match e {
-            crate::cuda::GpuStepError::Unstable(i) => StepStop::Unstable(i),
-            crate::cuda::GpuStepError::Cuda(e) => StepStop::Device(e.to_string()),
         }
     }
 }
@@ -524,7 +467,7 @@ impl Progress {
         Self { bar, last_line: Instant::now(), start_time, start_steps }
     }
 
-    fn report<R: Real, M: Model<R>>(&mut self, sim: &Simulation<R, M>, end: f64, wall: Duration) {
+    fn report<R: Real, M: Model<R>>(&mut self, sim: &RunState<R, M>, end: f64, wall: Duration) {
         let rate = (sim.steps - self.start_steps) as f64 / wall.as_secs_f64().max(1e-9);
         let line = format!(
             "t = {:.4}/{end} s | {rate:.0} steps/s | {} fluid particles{} | dt {:.2e} s ({})",
@@ -597,8 +540,8 @@ impl Tally {
     }
 }
 
-fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
-    mut state: S,
+fn drive<R: Real, M: Model<R>, B: StepBackend<R>>(
+    mut sim: Simulation<R, M, B>,
     scene: &Scene,
     initial: &InitialParticles,
     options: &RunOptions,
@@ -626,8 +569,8 @@ fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
     let mut series = Series::new(series_path.clone(), expected_frames, listed);
     let mut frame = Frame::default();
     let started = Instant::now();
-    let mut write_frame = |sim: &Simulation<R, M>, tally: &mut Tally| -> Result<(), RunError> {
-        frame.capture(sim);
+    let mut write_frame = |run: &RunState<R, M>, host: &HostParticles<R>, tally: &mut Tally| -> Result<(), RunError> {
+        frame.capture(run, host);
         let name = frame_name(tally.frame_times.len());
         let path = dir.join(&name);
         for format in &scene.output.formats {
@@ -651,24 +594,24 @@ fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
             image.save(&png).map_err(|e| io_error("preview", &png, e))?;
         }
         if writes_series {
-            series.push(sim.time, &name).map_err(|e| io_error("series", series.path(), e))?;
+            series.push(run.time, &name).map_err(|e| io_error("series", series.path(), e))?;
         }
-        tally.frame_times.push(sim.time);
+        tally.frame_times.push(run.time);
         Ok(())
     };
-    let save_checkpoint = |sim: &Simulation<R, M>, tally: &mut Tally| -> Result<(), RunError> {
+    let save_checkpoint = |run: &RunState<R, M>, host: &HostParticles<R>, tally: &mut Tally| -> Result<(), RunError> {
         tally.wall_s = earlier_wall_s + started.elapsed().as_secs_f64();
         let path = dir.join(checkpoint::FILE_NAME);
-        checkpoint::write(dir, sim, scene, tally).map_err(|e| io_error("checkpoint", &path, e))
+        checkpoint::write(dir, run, &host.particles, scene, tally).map_err(|e| io_error("checkpoint", &path, e))
     };
     if fresh {
-        write_frame(state.sim(), &mut tally)?;
-        save_checkpoint(state.sim(), &mut tally)?;
+        write_frame(&sim.run, sim.host(), &mut tally)?;
+        save_checkpoint(&sim.run, sim.host(), &mut tally)?;
     }
 
     let mut last_report = started;
-    let mut progress = Progress::new(options.quiet, state.sim().time, state.sim().steps);
-    let summary = |sim: &Simulation<R, M>, tally: &Tally| {
+    let mut progress = Progress::new(options.quiet, sim.run.time, sim.run.steps);
+    let summary = |sim: &RunState<R, M>, tally: &Tally| {
         let wall = earlier_wall_s + started.elapsed().as_secs_f64();
         Summary {
             steps: sim.steps,
@@ -686,52 +629,50 @@ fn drive<R: Real, M: Model<R>, S: Stepping<R, M>>(
             series: writes_series.then(|| series_path.clone()),
         }
     };
-    let stopped = |stop: StepStop, s: Summary| match stop {
-        StepStop::Unstable(instability) => RunError::Unstable(instability, Box::new(s)),
-        StepStop::Device(e) => RunError::Device(e, Box::new(s)),
+    let stopped = |stop: StepError<B::Fault>, s: Summary| match stop {
+        StepError::Unstable(instability) => RunError::Unstable(instability, Box::new(s)),
+        StepError::Backend(e) => RunError::Device(e.to_string(), Box::new(s)),
     };
-    while state.sim().time < end * (1.0 - 1e-12) {
-        let sim = state.sim();
+    while sim.run.time < end * (1.0 - 1e-12) {
         let (dt, limit) = sim.next_dt();
-        let dt = dt.min(end - sim.time);
-        if let Err(stop) = state.step_with(dt, limit) {
+        let dt = dt.min(end - sim.run.time);
+        if let Err(stop) = sim.step_with(dt, limit) {
             progress.finish();
-            return Err(stopped(stop, summary(state.sim(), &tally)));
+            return Err(stopped(stop, summary(&sim.run, &tally)));
         }
-        let sim = state.sim();
-        tally.particle_steps += state.particle_count() as f64;
-        tally.max_compression = tally.max_compression.max(sim.diagnostics.max_compression);
-        tally.max_speed = tally.max_speed.max(sim.diagnostics.max_speed);
+        tally.particle_steps += sim.backend.particle_bound() as f64;
+        let run = &sim.run;
+        tally.max_compression = tally.max_compression.max(run.diagnostics.max_compression);
+        tally.max_speed = tally.max_speed.max(run.diagnostics.max_speed);
         let due = match every_steps {
-            Some(k) => sim.steps % k == 0,
-            None => sim.time >= tally.next_frame_time * (1.0 - 1e-9),
+            Some(k) => run.steps % k == 0,
+            None => run.time >= tally.next_frame_time * (1.0 - 1e-9),
         };
         if due {
-            if let Err(stop) = state.sync() {
+            if let Err(stop) = sim.sync() {
                 progress.finish();
-                return Err(stopped(stop, summary(state.sim(), &tally)));
+                return Err(stopped(stop, summary(&sim.run, &tally)));
             }
-            let sim = state.sim();
-            write_frame(sim, &mut tally)?;
-            tally.schedule_past(sim.time, every_s);
-            save_checkpoint(sim, &mut tally)?;
+            write_frame(&sim.run, sim.host(), &mut tally)?;
+            tally.schedule_past(sim.run.time, every_s);
+            save_checkpoint(&sim.run, sim.host(), &mut tally)?;
         }
         if !options.quiet && last_report.elapsed() >= Duration::from_millis(200) {
             last_report = Instant::now();
-            progress.report(state.sim(), end, started.elapsed());
+            progress.report(&sim.run, end, started.elapsed());
         }
-        if state.settled() && options.stop.is_some_and(|stop| stop.load(Ordering::Relaxed)) {
+        if sim.settled() && options.stop.is_some_and(|stop| stop.load(Ordering::Relaxed)) {
             progress.finish();
-            if let Err(stop) = state.sync() {
-                return Err(stopped(stop, summary(state.sim(), &tally)));
+            if let Err(stop) = sim.sync() {
+                return Err(stopped(stop, summary(&sim.run, &tally)));
             }
-            save_checkpoint(state.sim(), &mut tally)?;
-            return Err(RunError::Interrupted(Box::new(summary(state.sim(), &tally))));
+            save_checkpoint(&sim.run, sim.host(), &mut tally)?;
+            return Err(RunError::Interrupted(Box::new(summary(&sim.run, &tally))));
         }
     }
     progress.finish();
-    if let Err(stop) = state.sync() {
-        return Err(stopped(stop, summary(state.sim(), &tally)));
+    if let Err(stop) = sim.sync() {
+        return Err(stopped(stop, summary(&sim.run, &tally)));
     }
-    Ok(summary(state.sim(), &tally))
+    Ok(summary(&sim.run, &tally))
 }

@@ -85,7 +85,7 @@ impl WithModel for TwoSteps<'_> {
             let (dt, limit) = sim.next_dt();
             sim.step_with(dt, limit).expect("stable");
         }
-        let p = &sim.particles;
+        let p = sim.particles();
         let n = p.len();
         (0..3).flat_map(|a| p.position[a][..n].iter().copied().chain(p.velocity[a][..n].iter().map(|v| v.to_f64()))).collect()
     }

@@ -8,6 +8,8 @@
 
 mod common;
 
+use coil::particles::Particles;
+use coil::simulation::backend::Backend as _;
 use coil::cuda::device_array::{vec3_view, vec3_view_mut, DeviceArray};
 use coil::cuda::gpu::{ByValue, PTX};
 use coil::cuda::{Gpu, GpuSimulation};
@@ -192,8 +194,7 @@ fn cross<R: Real>(scene: &Scene) -> StressModel<Cross<R>> {
 }
 
 /// Fluid positions (m) and velocities (m/s) by particle id.
-fn state_by_id<R: Real, M: Model<R>>(sim: &Simulation<R, M>) -> Vec<(u32, [f64; 3], [f64; 3])> {
-    let p = &sim.particles;
+fn state_by_id<R: Real>(p: &Particles<R>) -> Vec<(u32, [f64; 3], [f64; 3])> {
     let mut out: Vec<_> = (0..p.len())
         .map(|i| (p.id[i], [0, 1, 2].map(|a| p.position[a][i]), [0, 1, 2].map(|a| p.velocity[a][i].to_f64())))
         .collect();
@@ -224,13 +225,13 @@ fn both_with<R: Real, M: Model<R>>(
 ) -> (Simulation<R, M>, GpuSimulation<R, M>) {
     let initial = initial_particles(scene, "test scene").expect("valid");
     let mut cpu = Simulation::<R, M>::new(scene, &initial, model);
-    let mut on_gpu = GpuSimulation::new(Simulation::<R, M>::for_device(scene, &initial, model), gpu).expect("device state");
-    on_gpu.check_every = 1;
+    let mut on_gpu = GpuSimulation::<R, M>::new_on_gpu(scene, &initial, model, gpu).expect("device state");
+    on_gpu.backend.check_every = 1;
     for _ in 0..steps {
         cpu.step_with(dt, coil::time_step::Limit::Acoustic).expect("stable on the CPU");
         on_gpu.step_with(dt, coil::time_step::Limit::Acoustic).expect("stable on the device");
     }
-    on_gpu.download().expect("download");
+    on_gpu.sync().expect("download");
     (cpu, on_gpu)
 }
 
@@ -243,7 +244,7 @@ fn both<R: Real, M: Model<R>>(gpu: Gpu, scene: &Scene, model: M, steps: usize) -
 /// `scene` with `model`.
 fn f64_difference_after_50_steps<M: Model<f64>>(engine: Engine, scene: &Scene, model: M) -> f64 {
     let (cpu, on_gpu) = both::<f64, _>(engine.open(), scene, model, 50);
-    largest_position_difference(&state_by_id(&cpu), &state_by_id(&on_gpu.host))
+    largest_position_difference(&state_by_id(cpu.particles()), &state_by_id(on_gpu.particles()))
 }
 
 /// One step: the sort is integer work on identical positions, so the particle order must be
@@ -254,7 +255,7 @@ fn one_gpu_step_sorts_exactly_like_the_cpu() {
     for engine in engines() {
         let scene = dam_break();
         let (cpu, on_gpu) = both::<f64, _>(engine.open(), &scene, cross::<f64>(&scene), 1);
-        let (c, g) = (&cpu.particles, &on_gpu.host.particles);
+        let (c, g) = (&cpu.particles(), &on_gpu.particles());
         assert_eq!(c.len(), g.len());
         assert_eq!(c.id[..c.len()], g.id[..g.len()], "{engine:?}: particle order after the sort");
         let relative = if engine == Engine::Emulated { 0.0 } else { 1e-12 };
@@ -272,7 +273,7 @@ fn a_scene_on_the_gpu_agrees_with_the_cpu() {
     fn compare<R: Real>(engine: Engine, position_tolerance_m: f64) {
         let scene = dam_break();
         let (cpu, on_gpu) = both::<R, _>(engine.open(), &scene, cross::<R>(&scene), 50);
-        let worst = largest_position_difference(&state_by_id(&cpu), &state_by_id(&on_gpu.host));
+        let worst = largest_position_difference(&state_by_id(cpu.particles()), &state_by_id(on_gpu.particles()));
         println!("{engine:?}, {}: largest position difference after 50 steps {worst:.3e} m", R::NAME);
         assert!(worst <= position_tolerance_m, "{engine:?}, {}: positions differ by {worst:.3e} m", R::NAME);
     }
@@ -349,7 +350,7 @@ fn two_gpu_runs_are_bit_identical() {
     for engine in engines() {
         let run = || {
             let (_, on_gpu) = both::<f32, _>(engine.open(), &scene, laplacian, 30);
-            bits(&state_by_id(&on_gpu.host))
+            bits(&state_by_id(on_gpu.particles()))
         };
         assert!(run() == run(), "{engine:?}: two runs differ");
     }
@@ -363,9 +364,9 @@ fn an_unstable_gpu_run_is_stopped_by_the_guard() {
         let initial = initial_particles(&scene, "dam_break.toml").expect("valid");
         let model = cross::<f32>(&scene);
         let mut sim =
-            GpuSimulation::new(Simulation::<f32, _>::for_device(&scene, &initial, model), engine.open()).expect("device state");
-        sim.check_every = 1;
-        let bound = sim.host.stepper.bound.dt().0;
+            GpuSimulation::<f32, _>::new_on_gpu(&scene, &initial, model, engine.open()).expect("device state");
+        sim.backend.check_every = 1;
+        let bound = sim.run.stepper.bound.dt().0;
         let stopped = (0..2000).find_map(|_| sim.step_with(50.0 * bound, coil::time_step::Limit::Fixed).err());
         match stopped {
             Some(coil::cuda::GpuStepError::Unstable(i)) => assert!(i.dt_s > i.stability_bound_s),
@@ -389,11 +390,11 @@ fn a_jet_on_the_gpu_agrees_with_the_cpu() {
     let model = StressModel(Newtonian { nu0: 0.001 });
     for engine in engines() {
         let (cpu, on_gpu) = both_with::<f64, _>(engine.open(), &scene, model, 300, 2e-4);
-        assert!(cpu.removed > 0, "no particle left the domain: the test would not see the drop");
-        assert_eq!(on_gpu.host.removed, cpu.removed, "{engine:?}: particles removed");
-        assert_eq!(on_gpu.host.fluid_count(), cpu.fluid_count(), "{engine:?}: fluid particles");
-        let worst = largest_position_difference(&state_by_id(&cpu), &state_by_id(&on_gpu.host));
-        println!("{engine:?}, jet: {} removed, largest position difference after 300 steps {worst:.3e} m", cpu.removed);
+        assert!(cpu.run.removed > 0, "no particle left the domain: the test would not see the drop");
+        assert_eq!(on_gpu.run.removed, cpu.run.removed, "{engine:?}: particles removed");
+        assert_eq!(on_gpu.run.fluid_count(), cpu.run.fluid_count(), "{engine:?}: fluid particles");
+        let worst = largest_position_difference(&state_by_id(cpu.particles()), &state_by_id(on_gpu.particles()));
+        println!("{engine:?}, jet: {} removed, largest position difference after 300 steps {worst:.3e} m", cpu.run.removed);
         assert!(worst <= engine.f64_tolerance_m(), "{engine:?}, jet: positions differ by {worst:.3e} m");
     }
 }
@@ -417,14 +418,14 @@ fn periodic_channels_on_the_gpu_agree_with_the_cpu() {
     let initial = initial_particles(&scene, "channel").expect("valid");
     fn worst<M: Model<f64>>(engine: Engine, scene: &Scene, initial: &[(u32, [f64; 3], [f64; 3])], model: M) -> (f64, usize) {
         let (cpu, on_gpu) = both::<f64, _>(engine.open(), scene, model, 50);
-        let c = state_by_id(&cpu);
+        let c = state_by_id(cpu.particles());
         // Particles that crossed the face at x = L came back in at x = 0.
         let wrapped = c.iter().zip(initial).filter(|(now, start)| now.0 == start.0 && now.1[0] < start.1[0]).count();
-        (largest_position_difference(&c, &state_by_id(&on_gpu.host)), wrapped)
+        (largest_position_difference(&c, &state_by_id(on_gpu.particles())), wrapped)
     }
     let start = {
         let cpu = Simulation::<f64, _>::new(&scene, &initial, cross::<f64>(&scene));
-        state_by_id(&cpu)
+        state_by_id(cpu.particles())
     };
     let morris = ShearThinningMorrisModel(cross_law::<f64>(&scene.material.viscosity));
     for engine in engines() {
@@ -640,7 +641,7 @@ fn random_stages(engine: Engine, seed: u64) {
     // quarter of them (ids below n / 4) are wall particles, whose acceleration is zero.
     let scene = dam_break();
     let initial = initial_particles(&scene, "dam_break.toml").expect("valid");
-    let mut fluid = Simulation::<f64, _>::new(&scene, &initial, cross::<f64>(&scene)).fluid;
+    let mut fluid = Simulation::<f64, _>::new(&scene, &initial, cross::<f64>(&scene)).run.fluid;
     fluid.boundary_count = n as u32 / 4;
     let rheology = cross_law::<f64>(&scene.material.viscosity);
     let sorted: [Vec<f64>; 3] = [0, 1, 2].map(|a| order[..live].iter().map(|&i| position[a][i as usize]).collect());
@@ -795,10 +796,10 @@ fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
 fn held_and_counted<R: Real, M: Model<R>>(scene: &Scene, model: M) -> (usize, usize) {
     let initial = initial_particles(scene, "dam_break.toml").expect("particles");
     let mut on_gpu =
-        GpuSimulation::new(Simulation::<R, M>::for_device(scene, &initial, model), Gpu::emulated_with_memory(usize::MAX))
+        GpuSimulation::<R, M>::new_on_gpu(scene, &initial, model, Gpu::emulated_with_memory(usize::MAX))
             .expect("device state");
-    let (free, total) = on_gpu.gpu().memory();
-    (total - free, on_gpu.device_bytes())
+    let (free, total) = on_gpu.backend.gpu().memory();
+    (total - free, on_gpu.backend.memory_bytes())
 }
 
 /// The device memory a run reports is every byte it allocates (the emulated device counts the

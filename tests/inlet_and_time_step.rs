@@ -15,14 +15,14 @@ fn delivered_mass_rate(text: &str, nominal_area: f64) {
     let initial = initial_particles(&scene, "jet.toml").expect("valid");
     let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.001 }));
     let duration = 0.2;
-    while sim.time < duration - 1e-12 {
+    while sim.run.time < duration - 1e-12 {
         let (dt, limit) = sim.next_dt();
-        sim.step_with(dt.min(duration - sim.time), limit).expect("stable");
+        sim.step_with(dt.min(duration - sim.run.time), limit).expect("stable");
     }
-    let mass = sim.injected as f64 * sim.fluid.mass;
+    let mass = sim.run.injected as f64 * sim.run.fluid.mass;
     let nominal = 1000.0 * nominal_area * 0.5 * duration;
     // Layers arrive whole: the delivered mass is within one layer of rho0 A U t.
-    let layer_mass = sim.fluid.mass * layer_size(&scene);
+    let layer_mass = sim.run.fluid.mass * layer_size(&scene);
     assert!((mass - nominal).abs() <= layer_mass, "delivered {mass} kg, nominal {nominal} kg, layer {layer_mass} kg");
     assert!(layer_mass < 0.05 * nominal, "the test resolves the rate to 5 %");
 }
@@ -56,13 +56,13 @@ fn the_nozzle_tube_pushes_the_jet_at_its_speed_when_the_jet_is_blocked() {
     let scene = common::scene(&text);
     let initial = initial_particles(&scene, "jet.toml").expect("valid");
     let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.01 }));
-    while sim.time < 0.1 {
+    while sim.run.time < 0.1 {
         sim.step().expect("stable");
     }
-    let tube = sim.inlet_tubes().next().expect("one inlet");
-    let p = &sim.particles;
+    let tube = sim.run.inlet_tubes().next().expect("one inlet");
+    let p = sim.particles();
     let x = p.position_view();
-    let inside: Vec<usize> = (0..p.len()).filter(|&i| !sim.fluid.is_boundary(p.id[i]) && tube.contains(x.at(i))).collect();
+    let inside: Vec<usize> = (0..p.len()).filter(|&i| !sim.run.fluid.is_boundary(p.id[i]) && tube.contains(x.at(i))).collect();
     // The tube is h = 0.004 m long and layers are about one spacing (0.002 m) apart: whole
     // layers, two or three of them, none crushed together.
     let layers = inside.len() as f64 / layer_size(&scene);
@@ -73,7 +73,7 @@ fn the_nozzle_tube_pushes_the_jet_at_its_speed_when_the_jet_is_blocked() {
     }
     // Below the exit the jet has slowed down against the plate.
     let slowest =
-        (0..p.len()).filter(|&i| !sim.fluid.is_boundary(p.id[i])).map(|i| p.velocity[1][i].abs()).fold(f64::INFINITY, f64::min);
+        (0..p.len()).filter(|&i| !sim.run.fluid.is_boundary(p.id[i])).map(|i| p.velocity[1][i].abs()).fold(f64::INFINITY, f64::min);
     assert!(slowest < 0.25, "the plate stops the jet (slowest {slowest} m/s)");
 }
 
@@ -91,17 +91,17 @@ fn inlet_stops_at_the_particle_budget_and_moving_nozzle_follows_waypoints() {
     assert_eq!(inlet.nozzle(0.5).0, [0.02, 0.0, 0.0], "held at the last waypoint");
     let initial = initial_particles(&scene, "jet.toml").expect("valid");
     let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.001 }));
-    while sim.time < 0.2 {
+    while sim.run.time < 0.2 {
         sim.step().expect("stable");
     }
     let layer = inlet.layer_size();
-    assert_eq!(sim.fluid_count(), 500 / layer * layer, "whole layers up to the budget");
+    assert_eq!(sim.run.fluid_count(), 500 / layer * layer, "whole layers up to the budget");
     // The first layer is due at t = 0, so the first that does not fit, number 500 / layer from
     // 0, is due that many layer periods later; the step that finds it so is noted.
-    let period = layer as f64 / sim.inlets()[0].particles_per_second();
+    let period = layer as f64 / sim.run.inlets()[0].particles_per_second();
     let due = (500 / layer) as f64 * period;
-    let reached = sim.capacity_reached_at.expect("the budget stopped the inlet");
-    assert!((reached - due).abs() <= sim.last_dt + 1e-12, "noted at {reached} s, the layer was due at {due} s");
+    let reached = sim.run.capacity_reached_at.expect("the budget stopped the inlet");
+    assert!((reached - due).abs() <= sim.run.last_dt + 1e-12, "noted at {reached} s, the layer was due at {due} s");
 }
 
 #[test]
@@ -111,12 +111,12 @@ fn particles_leaving_the_domain_are_removed_and_counted() {
     let scene = common::scene(&text);
     let initial = initial_particles(&scene, "jet.toml").expect("valid");
     let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.001 }));
-    while sim.time < 0.6 {
+    while sim.run.time < 0.6 {
         sim.step().expect("stable");
     }
-    assert!(sim.removed > 0);
-    assert_eq!(sim.capacity_reached_at, None, "the capacity of 200 000 never stopped the inlet");
-    let p = &sim.particles;
+    assert!(sim.run.removed > 0);
+    assert_eq!(sim.run.capacity_reached_at, None, "the capacity of 200 000 never stopped the inlet");
+    let p = sim.particles();
     assert!((0..p.len()).all(|i| p.position[1][i] >= -0.2), "no particle below the domain is kept");
 }
 
@@ -166,7 +166,7 @@ fn a_safety_factor_above_one_is_refused_unless_overridden_and_then_scales_the_bo
     let allowed = common::scene(&above.replace("safety_factor = 4.0", "safety_factor = 4.0\nallow_above_stability_bound = true"));
     let initial = initial_particles(&allowed, "box.toml").expect("particles");
     let sim = Simulation::<f64, _>::new(&allowed, &initial, StressModel(Newtonian { nu0: allowed.material.viscosity.nu0_m2_s }));
-    let (bound, _) = sim.stepper.bound.dt();
+    let (bound, _) = sim.run.stepper.bound.dt();
     let (dt, _) = sim.next_dt();
     assert!((dt - 4.0 * bound).abs() < 1e-12 * bound, "{dt} against 4 x {bound}");
 }

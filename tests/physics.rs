@@ -3,6 +3,7 @@
 
 mod common;
 
+use coil::simulation::backend::Backend as _;
 use coil::model::{LaplacianModel, Model, StressModel};
 use coil::setup::initial_particles;
 use coil::simulation::Simulation;
@@ -20,7 +21,7 @@ fn simulation<M: Model<f64>>(text: &str, model: M) -> Simulation<f64, M> {
 }
 
 fn position(sim: &Simulation<f64, impl Model<f64>>, i: usize) -> [f64; 3] {
-    [0, 1, 2].map(|a| sim.particles.position[a][i])
+    [0, 1, 2].map(|a| sim.particles().position[a][i])
 }
 
 #[test]
@@ -28,25 +29,25 @@ fn velocity_gradient_of_a_linear_field_in_the_interior() {
     let s = 0.01;
     let mut sim = simulation(&common::box_scene(s, [0.12; 3], [0.12; 3], ""), StressModel(Newtonian { nu0: 0.01 }));
     let g = [[0.3, -1.2, 0.5], [2.0, 0.1, -0.7], [0.4, 0.9, -0.4]];
-    let n = sim.particles.len();
+    let n = sim.particles().len();
     for i in 0..n {
         let x = position(&sim, i);
-        let fluid = !sim.fluid.is_boundary(sim.particles.id[i]);
+        let fluid = !sim.run.fluid.is_boundary(sim.particles().id[i]);
         for a in 0..3 {
-            sim.particles.velocity[a][i] = if fluid { (0..3).map(|b| g[a][b] * x[b]).sum() } else { 0.0 };
+            sim.particles_mut().velocity[a][i] = if fluid { (0..3).map(|b| g[a][b] * x[b]).sum() } else { 0.0 };
         }
     }
-    let velocity = sim.particles.velocity_view();
-    let density = sim.particles.density_view();
+    let velocity = sim.particles().velocity_view();
+    let density = sim.particles().density_view();
     // Eq. (8) on the lattice returns alpha grad v, with alpha = sum_j V_j o_x dW/dx(-o) the
     // lattice quadrature of int x (x) grad W dV = I (offsets o = x_j - x_i, V_j = m / rho0).
-    let kernels = sim.fluid.kernels;
+    let kernels = sim.run.fluid.kernels;
     let mut alpha = 0.0;
     for k in -2i32..=2 {
         for j in -2i32..=2 {
             for i in -2i32..=2 {
                 let o = coil_kernels::Vec3::new(i as f64 * s, j as f64 * s, k as f64 * s);
-                alpha += sim.fluid.mass / 1000.0 * o.x * kernels.spiky_gradient(-o, o.norm2()).x;
+                alpha += sim.run.fluid.mass / 1000.0 * o.x * kernels.spiky_gradient(-o, o.norm2()).x;
             }
         }
     }
@@ -58,7 +59,7 @@ fn velocity_gradient_of_a_linear_field_in_the_interior() {
         if x.iter().any(|&c| c < 2.5 * s || c > 0.12 - 2.5 * s) {
             continue;
         }
-        let m = velocity_gradient(i, &sim.neighborhood(), &velocity, &density, &sim.fluid).m;
+        let m = velocity_gradient(i, &sim.host().neighborhood(), &velocity, &density, &sim.run.fluid).m;
         for a in 0..3 {
             for b in 0..3 {
                 let want = alpha * g[a][b];
@@ -77,8 +78,8 @@ fn pressure_and_viscous_forces_conserve_momentum() {
         .replace("[[boundary]]\nshape = \"box\"\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [0.1, 0.1, 0.1]\n", "");
     let cross = Cross { nu0: 0.5, nu_inf: 0.05, k: 1.0, n: 1.0 };
     let mut sim = simulation(&text, StressModel(cross));
-    assert_eq!(sim.boundary_count(), 0);
-    let n = sim.particles.len();
+    assert_eq!(sim.run.boundary_count(), 0);
+    let n = sim.particles().len();
     let mut seed = 12345u64;
     let mut rand = || {
         seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
@@ -86,9 +87,9 @@ fn pressure_and_viscous_forces_conserve_momentum() {
     };
     for i in 0..n {
         for a in 0..3 {
-            sim.particles.position[a][i] += 0.003 * rand();
-            sim.particles.velocity[a][i] = rand();
-            sim.particles.velocity_half[a][i] = sim.particles.velocity[a][i];
+            sim.particles_mut().position[a][i] += 0.003 * rand();
+            sim.particles_mut().velocity[a][i] = rand();
+            sim.particles_mut().velocity_half[a][i] = sim.particles_mut().velocity[a][i];
         }
     }
     sim.step_with(1e-5, coil::time_step::Limit::Fixed).expect("stable");
@@ -96,8 +97,8 @@ fn pressure_and_viscous_forces_conserve_momentum() {
     let mut scale = 0.0f64;
     for i in 0..n {
         for a in 0..3 {
-            total[a] += sim.particles.acceleration[a][i];
-            scale += sim.particles.acceleration[a][i].abs();
+            total[a] += sim.particles().acceleration[a][i];
+            scale += sim.particles().acceleration[a][i].abs();
         }
     }
     assert!(scale > 1.0, "forces are not trivially zero ({scale})");
@@ -113,12 +114,12 @@ fn laplacian_model_runs_and_is_not_the_stress_model() {
         .replace("gravity_m_s2 = [0.0, 0.0, 0.0]", "gravity_m_s2 = [0.0, -9.8, 0.0]");
     let mut a = simulation(&text, LaplacianModel(Newtonian { nu0: 0.01 }));
     let mut b = simulation(&text, StressModel(Newtonian { nu0: 0.01 }));
-    assert!(a.particles.stress.is_none(), "the Laplacian operator allocates no stress");
+    assert!(a.particles().stress.is_none(), "the Laplacian operator allocates no stress");
     for _ in 0..50 {
         a.step().expect("stable");
         b.step().expect("stable");
     }
-    assert_ne!(a.particles.velocity[1][..a.particles.len()], b.particles.velocity[1][..b.particles.len()]);
+    assert_ne!(a.particles().velocity[1][..a.particles().len()], b.particles().velocity[1][..b.particles().len()]);
 }
 
 #[test]
@@ -128,8 +129,8 @@ fn fluid_at_rest_without_gravity_stays_exactly_at_rest() {
     for _ in 0..100 {
         sim.step().expect("stable");
     }
-    assert!(sim.diagnostics.max_speed < 1e-10, "{:?}", sim.diagnostics);
-    assert!(sim.diagnostics.max_compression < 1e-12, "{:?}", sim.diagnostics);
+    assert!(sim.run.diagnostics.max_speed < 1e-10, "{:?}", sim.run.diagnostics);
+    assert!(sim.run.diagnostics.max_compression < 1e-12, "{:?}", sim.run.diagnostics);
 }
 
 #[test]
@@ -141,18 +142,18 @@ fn fluid_at_rest_under_gravity_stays_near_rest() {
         .replace("gravity_m_s2 = [0.0, 0.0, 0.0]", "gravity_m_s2 = [0.0, -9.8, 0.0]");
     let mut sim = simulation(&text, StressModel(Newtonian { nu0: 0.01 }));
     let mut max_speed = 0.0f64;
-    while sim.time < 0.3 {
+    while sim.run.time < 0.3 {
         sim.step().expect("stable");
-        max_speed = max_speed.max(sim.diagnostics.max_speed);
+        max_speed = max_speed.max(sim.run.diagnostics.max_speed);
     }
     let acoustic = g * h_m / c;
     assert!(max_speed < 3.0 * acoustic, "max speed {max_speed} m/s, acoustic scale {acoustic} m/s");
-    assert_eq!(sim.removed, 0);
+    assert_eq!(sim.run.removed, 0);
     // Holding the column up takes the floor's pressure rho g H, a compression g H / c^2 = 0.5 %
     // there; the acoustic waves add at most a few times that. The lid layer that gravity pulls
     // away from the lid has a density deficit instead, which the figure does not count.
     let hydrostatic = g * h_m / (c * c);
-    let compression = sim.diagnostics.max_compression;
+    let compression = sim.run.diagnostics.max_compression;
     assert!(compression > 0.5 * hydrostatic && compression < 5.0 * hydrostatic, "compression {compression}");
 }
 
@@ -160,19 +161,19 @@ fn fluid_at_rest_under_gravity_stays_near_rest() {
 fn neighbor_search_equals_brute_force() {
     let text = common::box_scene(0.01, [0.08; 3], [0.08; 3], "");
     let mut sim = simulation(&text, StressModel(Newtonian { nu0: 0.01 }));
-    let n = sim.particles.len();
+    let n = sim.particles().len();
     let mut seed = 99u64;
     for i in 0..n {
         for a in 0..3 {
             seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            sim.particles.position[a][i] += 0.02 * (((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5);
+            sim.particles_mut().position[a][i] += 0.02 * (((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5);
         }
     }
     // One step re-sorts the jittered particles; compare on the sorted state.
     sim.step_with(1e-9, coil::time_step::Limit::Fixed).expect("stable");
-    let n = sim.particles.len();
-    let h2 = sim.fluid.kernels.h2;
-    let nb = sim.neighborhood();
+    let n = sim.particles().len();
+    let h2 = sim.run.fluid.kernels.h2;
+    let nb = sim.host().neighborhood();
     for i in (0..n).step_by(7) {
         let mut grid = Vec::new();
         nb.for_each_neighbor(i, h2, |j, _, _: f64| grid.push(j));
@@ -200,7 +201,7 @@ fn results_do_not_depend_on_the_thread_count_or_the_calling_thread() {
         for _ in 0..60 {
             sim.step().expect("stable");
         }
-        let p = &sim.particles;
+        let p = sim.particles();
         let n = p.len();
         (p.id[..n].to_vec(), [0, 1, 2].map(|a| p.position[a][..n].to_vec()), [0, 1, 2].map(|a| p.velocity[a][..n].to_vec()))
     };
@@ -229,13 +230,13 @@ fn the_cpu_neighbor_lists_give_the_grids_results_to_the_bit() {
         let initial = initial_particles(&scene, "test.toml").expect("valid");
         let mut listed = Simulation::new(&scene, &initial, model);
         let mut grid = Simulation::for_device(&scene, &initial, model);
-        let list_bytes = listed.particles.capacity() * 4 * coil_kernels::neighbor_list::NEIGHBOR_SLOTS;
-        assert_eq!(listed.memory_bytes(), grid.memory_bytes() + list_bytes, "{what}: only the CPU run keeps lists");
+        let list_bytes = listed.particles().capacity() * 4 * coil_kernels::neighbor_list::NEIGHBOR_SLOTS;
+        assert_eq!(listed.backend.memory_bytes(), grid.backend.memory_bytes() + list_bytes, "{what}: only the CPU run keeps lists");
         for _ in 0..steps {
             listed.step().expect("stable");
             grid.step().expect("stable");
         }
-        let (a, b) = (&listed.particles, &grid.particles);
+        let (a, b) = (&listed.particles(), &grid.particles());
         let n = a.len();
         assert!(n > 100 && n == b.len() && a.id[..n] == b.id[..n], "{what}: {n} particles");
         for k in 0..3 {
@@ -245,7 +246,7 @@ fn the_cpu_neighbor_lists_give_the_grids_results_to_the_bit() {
             assert!(
                 a.velocity[k][..n].iter().any(|&v| v != 0.0),
                 "{what}: nothing moved along {k} ({n} particles at {} s)",
-                listed.time
+                listed.run.time
             );
         }
     }
@@ -278,13 +279,13 @@ fn the_cpu_neighbor_lists_give_the_grids_results_to_the_bit() {
 fn stress_divergence_reads_the_stress_it_is_given() {
     // With zero stress the paper's viscous term vanishes: acceleration = pressure + gravity only.
     let sim = simulation(&common::box_scene(0.02, [0.2; 3], [0.2; 3], ""), StressModel(Newtonian { nu0: 0.01 }));
-    let n = sim.particles.len();
+    let n = sim.particles().len();
     let zeros = vec![0.0; n];
     let z = View::new(&zeros[..]);
     let op = StressDivergence { stress: SymTensorView { xx: z, yy: z, zz: z, xy: z, xz: z, yz: z } };
-    let density = sim.particles.density_view();
+    let density = sim.particles().density_view();
     for i in 0..n {
-        let a = acceleration(i, &sim.neighborhood(), &density, &sim.fluid, &op);
+        let a = acceleration(i, &sim.host().neighborhood(), &density, &sim.run.fluid, &op);
         assert!(a.norm() < 1e-9, "lattice at rest density has no force, got {a:?}");
     }
 }

@@ -34,7 +34,7 @@ fn every_shipped_scene_loads_and_steps() {
         for _ in 0..3 {
             sim.step().unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         }
-        assert_eq!(sim.removed, 0, "{}", path.display());
+        assert_eq!(sim.run.removed, 0, "{}", path.display());
     }
 }
 

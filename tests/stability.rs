@@ -284,7 +284,7 @@ fn coincident_particles_get_finite_forces() {
     for _ in 0..50 {
         sim.step().expect("coincident particles do not blow up the run");
     }
-    let p = &sim.particles;
+    let p = sim.particles();
     assert!((0..p.len()).all(|i| (0..3).all(|a| p.acceleration[a][i].is_finite() && p.velocity[a][i].is_finite())));
 }
 

@@ -1,37 +1,36 @@
-//! One run on a CUDA device: every step of Algorithm 1 runs there as the PTX kernels of
+//! The CUDA backend: every pass of a run's schedule runs on the device as the PTX kernels of
 //! `kernels/`, on structure-of-arrays buffers preallocated to the run's capacity.
 //!
-//! The host keeps the clock, the inlets and the time step (`Simulation`'s own fields); its
-//! particle arrays are a mirror filled only for output frames. Inside a step nothing waits for
-//! the device: kernels read the particle count from device memory, and the host launches
-//! threads for an upper bound (`bound`). Every `check_every` steps, and before every frame, the
-//! host reads the diagnostics (largest speed, compression, runaway particles) and the count.
+//! The host keeps the run state (`RunState`); the backend keeps the particles on the device and
+//! a copy in host memory filled only for output frames. Inside a step nothing waits for the
+//! device: kernels read the particle count from device memory, and the host launches threads
+//! for an upper bound (`bound`). Every `check_every` steps, and before every frame, the host
+//! reads the diagnostics (largest speed, compression, runaway particles) and the count.
 
 use super::device_array::{vec3_view, vec3_view_mut, vec3_zeros, DeviceArray, DeviceVec3};
 use super::gpu::{ByValue, CudaError, Gpu};
 use super::scan::scan_chunk_totals;
-use crate::model::{Model, ParticleState, Passes};
-use crate::particles::{ModelFields, Particles};
-use crate::scene::{DensityKernel, ViscousVelocity};
-use crate::simulation::{inject, Instability, Simulation};
-use crate::time_step::Limit;
+use crate::model::Model;
+use crate::particles::{HostParticles, ModelFields, Particles};
+use crate::simulation::backend::{Backend, ParticleViews, Passes, Readout, Schedule};
+use crate::simulation::{Setup, Simulation, StepError};
 use coil_kernels::acceleration::{AccelerationArgs, ViscousOperator};
 use coil_kernels::cell_grid::{HashArgs, Neighborhood};
 use coil_kernels::counting_sort::scan_levels_len;
 use coil_kernels::cross_viscosity::Rheology;
-use coil_kernels::density::{DensityArgs, DensityKernel as _, Poly6, Spiky};
+use coil_kernels::density::{DensityArgs, DensityKernel};
 use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
+use coil_kernels::fluid::Fluid;
 use coil_kernels::fluid_cells::{HoldsFluidArgs, NearFluidArgs};
 use coil_kernels::hourglass_control::VelocityGradientArgs;
 use coil_kernels::leapfrog::LeapfrogArgs;
 use coil_kernels::mirrored_wall::MirroredWallArgs;
 use coil_kernels::nozzle::NozzleArgs;
 use coil_kernels::shear_viscosity::ShearViscosityArgs;
-use coil_kernels::topology::{Open, Topology};
+use coil_kernels::topology::{Periodic, Topology};
 use coil_kernels::velocity_gradient::StressArgs;
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, View};
 use coil_kernels::Real;
-use std::fmt;
 
 /// Buckets per scan chunk on the device: more, shorter chunks than on the CPU keep each
 /// thread's loop short; their totals are scanned level by level (`super::scan`).
@@ -45,27 +44,8 @@ fn buckets_chunks(buckets: usize) -> usize {
 /// Particles per range of the diagnostics reduction.
 const DIAGNOSTICS_RANGE: usize = 256;
 
-/// Why a GPU step failed.
-#[derive(Debug)]
-pub enum GpuStepError {
-    Unstable(Instability),
-    Cuda(CudaError),
-}
-
-impl fmt::Display for GpuStepError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            GpuStepError::Unstable(i) => i.fmt(f),
-            GpuStepError::Cuda(e) => e.fmt(f),
-        }
-    }
-}
-
-impl From<CudaError> for GpuStepError {
-    fn from(e: CudaError) -> Self {
-        GpuStepError::Cuda(e)
-    }
-}
+/// Why a step on the device stopped.
+pub type GpuStepError = StepError<CudaError>;
 
 /// Particle and grid state on the device.
 struct DeviceState<R> {
@@ -190,14 +170,6 @@ impl<R: Real> DeviceState<R> {
             + self.wall_mirror.as_ref().map_or(0, v3)
     }
 
-    /// The velocity array the viscous terms read.
-    fn viscous_velocity(&self, read: ViscousVelocity) -> &DeviceVec3<R> {
-        match read {
-            ViscousVelocity::FullStep => &self.velocity,
-            ViscousVelocity::HalfStep => &self.velocity_half,
-        }
-    }
-
     fn stress_view(&self, n: usize) -> Option<SymTensorViewMut<'static, R>> {
         self.stress.as_ref().map(|[xx, yy, zz, xy, xz, yz]| SymTensorViewMut {
             xx: xx.view_mut(n),
@@ -242,7 +214,13 @@ impl GpuPasses<'_> {
     }
 }
 
-impl<R: Real, T: Topology> Passes<R, Neighborhood<'static, T>> for GpuPasses<'_> {
+impl<R: Real, T: Topology> Passes<R, T, Neighborhood<'static, T>> for GpuPasses<'_> {
+    fn density<K: DensityKernel>(&mut self, args: DensityArgs<'_, R, Neighborhood<'static, T>>) {
+        self.run(kernel::<R>("density", K::NAME, T::NAME), args);
+    }
+    fn mirrored_wall(&mut self, args: MirroredWallArgs<'_, R, T>) {
+        self.run(kernel::<R>("mirrored_wall", "", T::NAME), args);
+    }
     fn stress<Rh: Rheology<R>>(&mut self, args: StressArgs<'_, R, Rh, Neighborhood<'static, T>>) {
         self.run(kernel::<R>("stress", Rh::NAME, T::NAME), args);
     }
@@ -255,13 +233,50 @@ impl<R: Real, T: Topology> Passes<R, Neighborhood<'static, T>> for GpuPasses<'_>
     fn acceleration<Op: ViscousOperator<R>>(&mut self, args: AccelerationArgs<'_, R, Op, Neighborhood<'static, T>>) {
         self.run(kernel::<R>("acceleration", Op::NAME, T::NAME), args);
     }
+    fn nozzle(&mut self, args: NozzleArgs<'_, R>) {
+        self.run(kernel::<R>("nozzle", "", ""), args);
+    }
+    fn leapfrog(&mut self, args: LeapfrogArgs<'_, R, T>) {
+        self.run(kernel::<R>("leapfrog", "", T::NAME), args);
+    }
 }
 
-pub struct GpuSimulation<R: Real, M: Model<R>> {
-    /// Clock, inlets, time step and counters; its particles mirror the device at frames.
-    pub host: Simulation<R, M>,
+/// A run on the device.
+pub type GpuSimulation<R, M> = Simulation<R, M, CudaBackend<R>>;
+
+impl<R: Real, M: Model<R>> Simulation<R, M, CudaBackend<R>> {
+    /// The run `setup` moved onto `gpu`; fresh runs then start with `sort_and_density`.
+    pub fn on_gpu(setup: Setup<R, M>, gpu: Gpu) -> Result<Self, CudaError> {
+        let Setup { run, host, wall_mirror } = setup;
+        // Four layers of every inlet per step is far above what dt at the Eq. (10) bound brings.
+        let staged = 4 * run.inlets().iter().map(|i| i.layer_size()).sum::<usize>();
+        let backend = CudaBackend::new(host, wall_mirror, staged, M::FIELDS, gpu)?;
+        Ok(Self { run, backend })
+    }
+
+    /// A fresh run of `scene` with the particles `initial` on `gpu`, sorted and with its density.
+    pub fn new_on_gpu(
+        scene: &crate::scene::Scene,
+        initial: &crate::setup::InitialParticles,
+        model: M,
+        gpu: Gpu,
+    ) -> Result<Self, CudaError> {
+        let mut sim = Self::on_gpu(Setup::new(scene, initial, model), gpu)?;
+        sim.sort_and_density()?;
+        Ok(sim)
+    }
+
+    /// The particles as the last [`Simulation::sync`] copied them from the device.
+    pub fn particles(&self) -> &Particles<R> {
+        &self.backend.mirror.particles
+    }
+}
+
+pub struct CudaBackend<R: Real> {
     gpu: Gpu,
     device: DeviceState<R>,
+    /// The particles and grid in host memory, copied from the device for frames.
+    mirror: HostParticles<R>,
     /// Host staging of this step's inlet layers.
     staged: Particles<R>,
     /// No more particles than this are live on the device.
@@ -271,38 +286,38 @@ pub struct GpuSimulation<R: Real, M: Model<R>> {
     figures: Vec<StateFigures>,
 }
 
-impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
-    /// Moves the run `host` (set up and sorted on the host) onto `gpu`.
-    pub fn new(host: Simulation<R, M>, gpu: Gpu) -> Result<Self, CudaError> {
+impl<R: Real> CudaBackend<R> {
+    /// Copies the particles `host` (and the walls' mirror images, under mirrored walls) onto
+    /// `gpu`, with room for `staged` inlet particles a step and the arrays of `fields`.
+    fn new(
+        host: HostParticles<R>,
+        wall_mirror: Option<[Vec<f64>; 3]>,
+        staged: usize,
+        fields: ModelFields,
+        gpu: Gpu,
+    ) -> Result<Self, CudaError> {
         let capacity = host.particles.capacity();
         let buckets = host.grid.grid.cell_count() as usize + 1;
-        // Four layers of every inlet per step is far above what dt at the Eq. (10) bound brings.
-        let staged_capacity = 4 * host.inlets().iter().map(|i| i.layer_size()).sum::<usize>();
         let tracks_fluid = host.grid.tracks_fluid().is_some();
-        let mut device = DeviceState::new(&gpu, capacity, buckets, staged_capacity, M::FIELDS, tracks_fluid)?;
-        if let Some(mirror) = &host.wall_mirror {
+        let mut device = DeviceState::new(&gpu, capacity, buckets, staged, fields, tracks_fluid)?;
+        if let Some(mirror) = &wall_mirror {
             let mut on_device = vec3_zeros(&gpu, mirror[0].len(), "wall mirror images")?;
             for a in 0..3 {
                 on_device[a].upload(&gpu, &mirror[a])?;
             }
             device.wall_mirror = Some(on_device);
         }
-        let mut sim = Self {
+        let mut backend = Self {
             bound: host.particles.len(),
-            staged: Particles::with_capacity(staged_capacity, ModelFields::default()),
+            staged: Particles::with_capacity(staged, ModelFields::default()),
             figures: vec![StateFigures::default(); device.figures.len()],
-            host,
+            mirror: host,
             gpu,
             device,
             check_every: 10,
         };
-        sim.upload()?;
-        Ok(sim)
-    }
-
-    /// No more particles than this are live on the device (exact after a check).
-    pub fn particle_bound(&self) -> usize {
-        self.bound
+        backend.upload()?;
+        Ok(backend)
     }
 
     /// The device, for timing (`Gpu::mark`, `Gpu::start_profile`).
@@ -315,14 +330,9 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         self.gpu
     }
 
-    /// Bytes of device memory the run allocated.
-    pub fn device_bytes(&self) -> usize {
-        self.device.bytes()
-    }
-
-    /// Copies the host's particles and sorted grid to the device.
+    /// Copies the host's particles and grid to the device.
     fn upload(&mut self) -> Result<(), CudaError> {
-        let p = &self.host.particles;
+        let p = &self.mirror.particles;
         let n = p.len();
         let (gpu, d) = (&self.gpu, &mut self.device);
         for a in 0..3 {
@@ -332,109 +342,10 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         }
         d.id.upload(gpu, &p.id[..n])?;
         d.density.upload(gpu, &p.density[..n])?;
-        d.cell_start.upload(gpu, self.host.grid.cell_start_mut())?;
-        d.near_fluid.upload(gpu, self.host.grid.near_fluid_mut())?;
+        d.cell_start.upload(gpu, self.mirror.grid.cell_start_mut())?;
+        d.near_fluid.upload(gpu, self.mirror.grid.near_fluid_mut())?;
         d.count.upload(gpu, &[n as u32])?;
         gpu.synchronize()
-    }
-
-    /// Brings the host mirror up to date: particles in sorted order and the grid (for frames).
-    pub fn download(&mut self) -> Result<(), GpuStepError> {
-        self.read_diagnostics()?;
-        let n = self.bound;
-        let (gpu, d) = (&self.gpu, &self.device);
-        let p = &mut self.host.particles;
-        p.set_len(n);
-        for a in 0..3 {
-            d.position[a].download(gpu, &mut p.position[a][..n])?;
-            d.velocity[a].download(gpu, &mut p.velocity[a][..n])?;
-            d.velocity_half[a].download(gpu, &mut p.velocity_half[a][..n])?;
-            d.acceleration[a].download(gpu, &mut p.acceleration[a][..n])?;
-        }
-        d.id.download(gpu, &mut p.id[..n])?;
-        d.density.download(gpu, &mut p.density[..n])?;
-        d.cell_start.download(gpu, self.host.grid.cell_start_mut())?;
-        d.near_fluid.download(gpu, self.host.grid.near_fluid_mut())?;
-        Ok(())
-    }
-
-    /// One step of Algorithm 1 on the device with a given dt (s).
-    pub fn step_with(&mut self, dt: f64, limit: Limit) -> Result<(), GpuStepError> {
-        self.inject(dt)?;
-        self.sort()?;
-        if self.host.grid.is_periodic() {
-            self.after_sort(self.host.grid.periodic, dt)?;
-        } else {
-            self.after_sort(Open, dt)?;
-        }
-        self.host.advance_clock(dt, limit);
-        if self.host.steps.is_multiple_of(self.check_every) {
-            self.read_diagnostics()?;
-        }
-        Ok(())
-    }
-
-    /// Lines 5-19, after the sort, with the neighbor loops and the wrap of topology `T`.
-    fn after_sort<T: Topology>(&mut self, topology: T, dt: f64) -> Result<(), CudaError> {
-        self.mark_cells_near_fluid(topology)?;
-        self.density(topology)?;
-        self.mirrored_walls(topology)?;
-        let n = self.bound;
-        let d = &self.device;
-        let state = ParticleState {
-            neighborhood: self.neighborhood(topology),
-            fluid: self.host.fluid,
-            id: d.id.view(n),
-            velocity: vec3_view(d.viscous_velocity(self.host.viscous_velocity), n),
-            density: d.density.view(n),
-            stress: d.stress_view(n),
-            viscosity: d.viscosity.as_ref().map(|v| v.view_mut(n)),
-            velocity_gradient: d
-                .velocity_gradient
-                .as_ref()
-                .map(|g| Mat3ViewMut { rows: [vec3_view_mut(&g[0], n), vec3_view_mut(&g[1], n), vec3_view_mut(&g[2], n)] }),
-            acceleration: vec3_view_mut(&d.acceleration, n),
-        };
-        let mut passes = GpuPasses { gpu: &mut self.gpu, count: d.count.view(1), threads: n as u32, result: Ok(()) };
-        self.host.model.accelerations(&mut passes, state);
-        passes.result?;
-        self.nozzles()?;
-        self.leapfrog(topology, dt)
-    }
-
-    /// Reads the device's diagnostics and particle count; stops an unstable run.
-    pub fn read_diagnostics(&mut self) -> Result<(), GpuStepError> {
-        let n = self.bound;
-        let d = &self.device;
-        let args = DiagnosticsArgs {
-            fluid: self.host.fluid,
-            runaway_speed2: self.host.runaway_speed * self.host.runaway_speed,
-            id: d.id.view(n),
-            velocity: vec3_view(&d.velocity, n),
-            density: d.density.view(n),
-        };
-        let ranges = n.div_ceil(DIAGNOSTICS_RANGE);
-        let out = ByValue(self.device.figures.view_mut(ranges));
-        let count = self.count();
-        // SAFETY: diagnostics_<R>(count, range_len, args, out), `out` holding one figure per range.
-        unsafe {
-            self.gpu.launch(
-                kernel::<R>("diagnostics", "", ""),
-                ranges as u32,
-                &[&count, &ByValue(DIAGNOSTICS_RANGE as u32), &ByValue(args), &out],
-            )?;
-        }
-        let mut live = [0u32];
-        self.device.count.download(&self.gpu, &mut live)?;
-        let live = live[0] as usize;
-        let figures = &mut self.figures[..live.div_ceil(DIAGNOSTICS_RANGE)];
-        self.device.figures.download(&self.gpu, figures)?;
-        self.host.diagnostics = figures.iter().fold(StateFigures::default(), |a, &b| a.combine(b));
-        let fluid_now = live - self.host.boundary_count();
-        let removed = self.host.fluid_count() - fluid_now;
-        self.host.count_removed(removed);
-        self.bound = live;
-        self.host.check().map_err(GpuStepError::Unstable)
     }
 
     fn count(&self) -> ByValue<View<'static, u32>> {
@@ -443,54 +354,12 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
 
     fn neighborhood<T: Topology>(&self, topology: T) -> Neighborhood<'static, T> {
         Neighborhood {
-            grid: self.host.grid.grid,
+            grid: self.mirror.grid.grid,
             cell_start: self.device.cell_start.view(self.device.cell_start.len()),
             position: vec3_view(&self.device.position, self.bound),
             topology,
             near_fluid: self.device.near_fluid.view(self.device.near_fluid.len()),
         }
-    }
-
-    /// Line 1: layers generated on the host, uploaded and appended behind the live particles.
-    fn inject(&mut self, dt: f64) -> Result<(), CudaError> {
-        self.staged.set_len(0);
-        let host = &mut self.host;
-        let room = (host.fluid_capacity() - host.fluid_count()).min(self.staged.capacity());
-        let added = inject(&mut host.inlets, host.time, dt, room, &mut host.next_id, &mut self.staged);
-        host.count_injected(added);
-        if added == 0 {
-            return Ok(());
-        }
-        let (gpu, d, s) = (&mut self.gpu, &mut self.device, &self.staged);
-        let count = ByValue(d.count.view(1));
-        let k = ByValue(added as u32);
-        for a in 0..3 {
-            d.staged_position[a].upload(gpu, &s.position[a][..added])?;
-            d.staged_velocity[a].upload(gpu, &s.velocity[a][..added])?;
-        }
-        d.staged_id.upload(gpu, &s.id[..added])?;
-        let capacity = d.id.len();
-        // SAFETY: append_<T>(count, added, staged, field) over arrays of the run's capacity,
-        // which the budget above keeps the appended particles within.
-        unsafe {
-            for a in 0..3 {
-                let staged_x = ByValue(d.staged_position[a].view(added));
-                gpu.launch("append_f64", added as u32, &[&count, &k, &staged_x, &ByValue(d.position[a].view_mut(capacity))])?;
-                let staged_v = ByValue(d.staged_velocity[a].view(added));
-                for target in [&d.velocity[a], &d.velocity_half[a]] {
-                    gpu.launch(
-                        kernel::<R>("append", "", ""),
-                        added as u32,
-                        &[&count, &k, &staged_v, &ByValue(target.view_mut(capacity))],
-                    )?;
-                }
-            }
-            let staged_id = ByValue(d.staged_id.view(added));
-            gpu.launch("append_u32", added as u32, &[&count, &k, &staged_id, &ByValue(d.id.view_mut(capacity))])?;
-            gpu.launch("grow_count", 1, &[&ByValue(d.count.view_mut(1)), &k])?;
-        }
-        self.bound += added;
-        Ok(())
     }
 
     /// Line 3: the counting sort by cell on the device, then the reorder of every field that
@@ -499,7 +368,7 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         let n = self.bound;
         let threads = n as u32;
         let count = self.count();
-        let grid = self.host.grid.grid;
+        let grid = self.mirror.grid.grid;
         let cells = grid.cell_count();
         let d = &mut self.device;
         let gpu = &mut self.gpu;
@@ -561,10 +430,10 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
     /// host's marks, every cell near fluid, stay as uploaded).
     fn mark_cells_near_fluid<T: Topology>(&mut self, topology: T) -> Result<(), CudaError> {
         let d = &self.device;
-        let (Some(boundary_count), Some(holds_fluid)) = (self.host.grid.tracks_fluid(), &d.holds_fluid) else {
+        let (Some(boundary_count), Some(holds_fluid)) = (self.mirror.grid.tracks_fluid(), &d.holds_fluid) else {
             return Ok(());
         };
-        let grid = self.host.grid.grid;
+        let grid = self.mirror.grid.grid;
         let cells = grid.cell_count();
         let cell_start = d.cell_start.view(d.cell_start.len());
         let holds = HoldsFluidArgs {
@@ -588,80 +457,158 @@ impl<R: Real, M: Model<R>> GpuSimulation<R, M> {
         }
     }
 
-    /// Lines 5-8: density (pressure is evaluated from it where it is read).
-    fn density<T: Topology>(&mut self, topology: T) -> Result<(), CudaError> {
-        let n = self.bound;
-        let args = DensityArgs {
-            neighborhood: self.neighborhood(topology),
-            fluid: self.host.fluid,
-            density: self.device.density.view_mut(n),
-        };
-        let count = self.count();
-        let variant = match self.host.density_kernel {
-            DensityKernel::Poly6 => Poly6::NAME,
-            DensityKernel::Spiky => Spiky::NAME,
-        };
-        // SAFETY: density_<K>_<T>_<R>(count, args).
-        unsafe { self.gpu.launch(kernel::<R>("density", variant, T::NAME), n as u32, &[&count, &ByValue(args)]) }
+}
+
+impl<R: Real> Backend<R> for CudaBackend<R> {
+    type Fault = CudaError;
+
+    fn periodic(&self) -> Option<Periodic> {
+        self.mirror.grid.is_periodic().then_some(self.mirror.grid.periodic)
     }
 
-    /// Wall particles mirror the fluid, when the scene asks (see `coil_kernels::mirrored_wall`).
-    fn mirrored_walls<T: Topology>(&mut self, topology: T) -> Result<(), CudaError> {
-        let Some(mirror) = &self.device.wall_mirror else {
+    fn inlet_staging(&mut self) -> (&mut Particles<R>, usize) {
+        self.staged.set_len(0);
+        let room = self.staged.capacity();
+        (&mut self.staged, room)
+    }
+
+    /// Uploads the staged layers and appends them behind the live particles.
+    fn append_staged(&mut self, added: usize) -> Result<(), CudaError> {
+        if added == 0 {
             return Ok(());
-        };
-        let n = self.bound;
-        let d = &self.device;
-        let args = MirroredWallArgs {
-            neighborhood: self.neighborhood(topology),
-            fluid: self.host.fluid,
-            id: d.id.view(n),
-            mirror: vec3_view(mirror, mirror[0].len()),
-            velocity: vec3_view_mut(d.viscous_velocity(self.host.viscous_velocity), n),
-            density: d.density.view_mut(n),
-        };
-        let count = self.count();
-        // SAFETY: mirrored_wall_<T>_<R>(count, args).
-        unsafe { self.gpu.launch(kernel::<R>("mirrored_wall", "", T::NAME), n as u32, &[&count, &ByValue(args)]) }
-    }
-
-    /// Fluid inside a nozzle's tube moves with the jet (see `coil_kernels::nozzle`).
-    fn nozzles(&mut self) -> Result<(), CudaError> {
-        let n = self.bound;
-        let count = self.count();
-        let d = &self.device;
-        for inlet in self.host.inlets() {
-            let args = NozzleArgs {
-                fluid: self.host.fluid,
-                tube: inlet.tube(self.host.time),
-                id: d.id.view(n),
-                position: vec3_view(&d.position, n),
-                acceleration: vec3_view_mut(&d.acceleration, n),
-                velocity_half: vec3_view_mut(&d.velocity_half, n),
-            };
-            // SAFETY: nozzle_<R>(count, args).
-            unsafe { self.gpu.launch(kernel::<R>("nozzle", "", ""), n as u32, &[&count, &ByValue(args)])? };
         }
+        let (gpu, d, s) = (&mut self.gpu, &mut self.device, &self.staged);
+        let count = ByValue(d.count.view(1));
+        let k = ByValue(added as u32);
+        for a in 0..3 {
+            d.staged_position[a].upload(gpu, &s.position[a][..added])?;
+            d.staged_velocity[a].upload(gpu, &s.velocity[a][..added])?;
+        }
+        d.staged_id.upload(gpu, &s.id[..added])?;
+        let capacity = d.id.len();
+        // SAFETY: append_<T>(count, added, staged, field) over arrays of the run's capacity,
+        // which the run's budget keeps the appended particles within.
+        unsafe {
+            for a in 0..3 {
+                let staged_x = ByValue(d.staged_position[a].view(added));
+                gpu.launch("append_f64", added as u32, &[&count, &k, &staged_x, &ByValue(d.position[a].view_mut(capacity))])?;
+                let staged_v = ByValue(d.staged_velocity[a].view(added));
+                for target in [&d.velocity[a], &d.velocity_half[a]] {
+                    gpu.launch(
+                        kernel::<R>("append", "", ""),
+                        added as u32,
+                        &[&count, &k, &staged_v, &ByValue(target.view_mut(capacity))],
+                    )?;
+                }
+            }
+            let staged_id = ByValue(d.staged_id.view(added));
+            gpu.launch("append_u32", added as u32, &[&count, &k, &staged_id, &ByValue(d.id.view_mut(capacity))])?;
+            gpu.launch("grow_count", 1, &[&ByValue(d.count.view_mut(1)), &k])?;
+        }
+        self.bound += added;
         Ok(())
     }
 
-    /// Lines 17-19: leap-frog.
-    fn leapfrog<T: Topology>(&mut self, topology: T, dt: f64) -> Result<(), CudaError> {
+    /// The device's count is read back with the diagnostics: the particles the sort drops are
+    /// counted then.
+    fn sort_and_reorder(&mut self) -> Result<usize, CudaError> {
+        self.sort()?;
+        match self.periodic() {
+            Some(periodic) => self.mark_cells_near_fluid(periodic)?,
+            None => self.mark_cells_near_fluid(coil_kernels::topology::Open)?,
+        }
+        Ok(0)
+    }
+
+    fn run<T: Topology, S: Schedule<R>>(&mut self, topology: T, schedule: S) -> Result<(), CudaError> {
         let n = self.bound;
         let d = &self.device;
-        let args = LeapfrogArgs {
-            fluid: self.host.fluid,
-            dt: R::from_f64(dt),
-            kick_dt: R::from_f64(self.host.kick_dt(dt)),
-            id: d.id.view(n),
-            acceleration: vec3_view(&d.acceleration, n),
-            position: vec3_view_mut(&d.position, n),
-            velocity_half: vec3_view_mut(&d.velocity_half, n),
-            velocity: vec3_view_mut(&d.velocity, n),
+        let views = ParticleViews {
             topology,
+            grid: self.neighborhood(topology),
+            neighbors: self.neighborhood(topology),
+            id: d.id.view(n),
+            position: vec3_view_mut(&d.position, n),
+            velocity: vec3_view_mut(&d.velocity, n),
+            velocity_half: vec3_view_mut(&d.velocity_half, n),
+            acceleration: vec3_view_mut(&d.acceleration, n),
+            density: d.density.view_mut(n),
+            stress: d.stress_view(n),
+            viscosity: d.viscosity.as_ref().map(|v| v.view_mut(n)),
+            velocity_gradient: d
+                .velocity_gradient
+                .as_ref()
+                .map(|g| Mat3ViewMut { rows: [vec3_view_mut(&g[0], n), vec3_view_mut(&g[1], n), vec3_view_mut(&g[2], n)] }),
+            wall_mirror: d.wall_mirror.as_ref().map(|m| vec3_view(m, m[0].len())),
         };
+        let mut passes = GpuPasses { gpu: &mut self.gpu, count: d.count.view(1), threads: n as u32, result: Ok(()) };
+        schedule.run(views, &mut passes);
+        passes.result
+    }
+
+    fn diagnostics_due(&self, steps: u64) -> bool {
+        steps.is_multiple_of(self.check_every)
+    }
+
+    fn read_diagnostics(&mut self, fluid: Fluid<R>, runaway_speed2: f64) -> Result<Readout, CudaError> {
+        let n = self.bound;
+        let d = &self.device;
+        let args = DiagnosticsArgs {
+            fluid,
+            runaway_speed2,
+            id: d.id.view(n),
+            velocity: vec3_view(&d.velocity, n),
+            density: d.density.view(n),
+        };
+        let ranges = n.div_ceil(DIAGNOSTICS_RANGE);
+        let out = ByValue(self.device.figures.view_mut(ranges));
         let count = self.count();
-        // SAFETY: leapfrog_<T>_<R>(count, args).
-        unsafe { self.gpu.launch(kernel::<R>("leapfrog", "", T::NAME), n as u32, &[&count, &ByValue(args)]) }
+        // SAFETY: diagnostics_<R>(count, range_len, args, out), `out` holding one figure per range.
+        unsafe {
+            self.gpu.launch(
+                kernel::<R>("diagnostics", "", ""),
+                ranges as u32,
+                &[&count, &ByValue(DIAGNOSTICS_RANGE as u32), &ByValue(args), &out],
+            )?;
+        }
+        let mut live = [0u32];
+        self.device.count.download(&self.gpu, &mut live)?;
+        let live = live[0] as usize;
+        let figures = &mut self.figures[..live.div_ceil(DIAGNOSTICS_RANGE)];
+        self.device.figures.download(&self.gpu, figures)?;
+        self.bound = live;
+        Ok(Readout { figures: figures.iter().fold(StateFigures::default(), |a, &b| a.combine(b)), live })
+    }
+
+    /// Copies the particles in sorted order and the grid to the host (for frames).
+    fn download(&mut self) -> Result<(), CudaError> {
+        let n = self.bound;
+        let (gpu, d) = (&self.gpu, &self.device);
+        let p = &mut self.mirror.particles;
+        p.set_len(n);
+        for a in 0..3 {
+            d.position[a].download(gpu, &mut p.position[a][..n])?;
+            d.velocity[a].download(gpu, &mut p.velocity[a][..n])?;
+            d.velocity_half[a].download(gpu, &mut p.velocity_half[a][..n])?;
+            d.acceleration[a].download(gpu, &mut p.acceleration[a][..n])?;
+        }
+        d.id.download(gpu, &mut p.id[..n])?;
+        d.density.download(gpu, &mut p.density[..n])?;
+        d.cell_start.download(gpu, self.mirror.grid.cell_start_mut())?;
+        d.near_fluid.download(gpu, self.mirror.grid.near_fluid_mut())?;
+        Ok(())
+    }
+
+    fn host(&self) -> &HostParticles<R> {
+        &self.mirror
+    }
+
+    fn particle_bound(&self) -> usize {
+        self.bound
+    }
+
+    /// Bytes of device memory.
+    fn memory_bytes(&self) -> usize {
+        self.device.bytes()
     }
 }

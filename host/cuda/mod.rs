@@ -7,4 +7,4 @@ pub mod gpu_simulation;
 pub mod scan;
 
 pub use gpu::{CudaError, Gpu, KernelTime};
-pub use gpu_simulation::{GpuSimulation, GpuStepError};
+pub use gpu_simulation::{CudaBackend, GpuSimulation, GpuStepError};

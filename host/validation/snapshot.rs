@@ -63,13 +63,13 @@ impl WithModel for Sample<'_> {
         let mut sim = Simulation::<R, M>::new(self.scene, self.initial, model);
         let mut out = Vec::with_capacity(self.times.len());
         for &t in self.times {
-            while sim.time < t * (1.0 - 1e-12) {
+            while sim.run.time < t * (1.0 - 1e-12) {
                 if let Some(g) = self.gravity {
-                    let [x, y, z] = g(sim.time).map(R::from_f64);
-                    sim.fluid.gravity = Vec3::new(x, y, z);
+                    let [x, y, z] = g(sim.run.time).map(R::from_f64);
+                    sim.run.fluid.gravity = Vec3::new(x, y, z);
                 }
                 let (dt, limit) = sim.next_dt();
-                sim.step_with(dt.min(t - sim.time), limit).map_err(|e| e.to_string())?;
+                sim.step_with(dt.min(t - sim.run.time), limit).map_err(|e| e.to_string())?;
             }
             out.push(snapshot(&sim));
         }
@@ -78,12 +78,12 @@ impl WithModel for Sample<'_> {
 }
 
 fn snapshot<R: Real, M: Model<R>>(sim: &Simulation<R, M>) -> Snapshot {
-    let p = &sim.particles;
-    let mut s = Snapshot { time_s: sim.time, ..Snapshot::default() };
-    for i in (0..p.len()).filter(|&i| !sim.fluid.is_boundary(p.id[i])) {
+    let p = sim.particles();
+    let mut s = Snapshot { time_s: sim.run.time, ..Snapshot::default() };
+    for i in (0..p.len()).filter(|&i| !sim.run.fluid.is_boundary(p.id[i])) {
         s.position.push([0, 1, 2].map(|a| p.position[a][i]));
         s.velocity.push([0, 1, 2].map(|a| p.velocity[a][i].to_f64()));
-        s.pressure.push(pressure(p.density[i], &sim.fluid).to_f64());
+        s.pressure.push(pressure(p.density[i], &sim.run.fluid).to_f64());
     }
     s
 }

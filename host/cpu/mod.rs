@@ -1,0 +1,198 @@
+//! The CPU backend: the particles in host memory, each pass a kernel function run over all
+//! particles with rayon.
+
+use crate::parallel::launch;
+use crate::neighbor_grid::NeighborGrid;
+use crate::particles::{mat3_view_mut, stress_view_mut, vec3_view, vec3_view_mut, view_mut, HostParticles, Particles};
+use crate::simulation::backend::{Backend, ParticleViews, Passes, Readout, Schedule};
+use crate::simulation::Diagnostics;
+use coil_kernels::acceleration::{acceleration_pass, AccelerationArgs, ViscousOperator};
+use coil_kernels::cell_grid::Neighbors;
+use coil_kernels::cross_viscosity::Rheology;
+use coil_kernels::density::{density_pass, DensityArgs, DensityKernel};
+use coil_kernels::diagnostics::{range_figures, DiagnosticsArgs};
+use coil_kernels::fluid::Fluid;
+use coil_kernels::hourglass_control::{velocity_gradient_pass, VelocityGradientArgs};
+use coil_kernels::leapfrog::{leapfrog_pass, LeapfrogArgs};
+use coil_kernels::mirrored_wall::{mirrored_wall_pass, MirroredWallArgs};
+use coil_kernels::nozzle::{nozzle_pass, NozzleArgs};
+use coil_kernels::shear_viscosity::{shear_viscosity_pass, ShearViscosityArgs};
+use coil_kernels::topology::{Open, Periodic, Topology};
+use coil_kernels::velocity_gradient::{stress_pass, StressArgs};
+use coil_kernels::view::{Vec3View, View};
+use coil_kernels::Real;
+use rayon::prelude::*;
+use std::convert::Infallible;
+
+/// Particles per range of the diagnostics reduction.
+const DIAGNOSTICS_RANGE: usize = 1024;
+
+pub struct CpuBackend<R> {
+    host: HostParticles<R>,
+    /// The support radius squared (m^2), within which the neighbor lists hold pairs.
+    support_radius2: R,
+    /// Each wall particle's mirror image (m), x, y, z by id, under mirrored walls.
+    wall_mirror: Option<[Vec<f64>; 3]>,
+}
+
+impl<R: Real> CpuBackend<R> {
+    /// The backend over `host`, visiting neighbors within `support_radius2` (m^2) through lists
+    /// that each sort rebuilds, or (`lists` false) through the grid's cells, as a device does.
+    pub fn new(mut host: HostParticles<R>, wall_mirror: Option<[Vec<f64>; 3]>, support_radius2: R, lists: bool) -> Self {
+        if lists {
+            host.grid.keep_neighbor_lists();
+        }
+        Self { host, support_radius2, wall_mirror }
+    }
+
+    /// The particles, to set a state by hand.
+    pub fn particles_mut(&mut self) -> &mut Particles<R> {
+        &mut self.host.particles
+    }
+
+    /// Runs `schedule` over the particles' views in `topology`, with neighbors visited through
+    /// what `neighbors` builds over the positions.
+    fn run_with<'a, T: Topology, N: Neighbors + Sync, S: Schedule<R>>(
+        p: &'a mut Particles<R>,
+        grid: &'a NeighborGrid,
+        topology: T,
+        wall_mirror: Option<Vec3View<'a, f64>>,
+        neighbors: impl FnOnce(Vec3View<'a, f64>) -> N,
+        schedule: S,
+    ) {
+        let n = p.len();
+        let position = vec3_view_mut(&mut p.position, n);
+        let views = ParticleViews {
+            topology,
+            grid: grid.neighborhood(position.read(), topology),
+            neighbors: neighbors(position.read()),
+            id: View::new(&p.id[..n]),
+            position,
+            velocity: vec3_view_mut(&mut p.velocity, n),
+            velocity_half: vec3_view_mut(&mut p.velocity_half, n),
+            acceleration: vec3_view_mut(&mut p.acceleration, n),
+            density: view_mut(&mut p.density, n),
+            stress: p.stress.as_mut().map(|s| stress_view_mut(s, n)),
+            viscosity: p.viscosity.as_mut().map(|v| view_mut(v, n)),
+            velocity_gradient: p.velocity_gradient.as_mut().map(|g| mat3_view_mut(g, n)),
+            wall_mirror,
+        };
+        schedule.run(views, &mut CpuPasses { n });
+    }
+}
+
+impl<R: Real> Backend<R> for CpuBackend<R> {
+    type Fault = Infallible;
+
+    fn periodic(&self) -> Option<Periodic> {
+        self.host.grid.is_periodic().then_some(self.host.grid.periodic)
+    }
+
+    fn inlet_staging(&mut self) -> (&mut Particles<R>, usize) {
+        (&mut self.host.particles, usize::MAX)
+    }
+
+    fn append_staged(&mut self, _added: usize) -> Result<(), Infallible> {
+        Ok(())
+    }
+
+    /// Also rebuilds the neighbor lists, where the backend keeps them.
+    fn sort_and_reorder(&mut self) -> Result<usize, Infallible> {
+        let HostParticles { particles, grid } = &mut self.host;
+        let removed = grid.sort(particles);
+        if grid.keeps_neighbor_lists() {
+            let position = vec3_view(&particles.position, particles.len());
+            if grid.is_periodic() {
+                grid.record_neighbors(position, self.support_radius2, grid.periodic);
+            } else {
+                grid.record_neighbors(position, self.support_radius2, Open);
+            }
+        }
+        Ok(removed)
+    }
+
+    fn run<T: Topology, S: Schedule<R>>(&mut self, topology: T, schedule: S) -> Result<(), Infallible> {
+        let HostParticles { particles, grid } = &mut self.host;
+        let grid = &*grid;
+        let mirror = self.wall_mirror.as_ref().map(|m| Vec3View::new(&m[0], &m[1], &m[2]));
+        if grid.keeps_neighbor_lists() {
+            let lists = |position| grid.listed_neighborhood(position, topology);
+            Self::run_with(particles, grid, topology, mirror, lists, schedule);
+        } else {
+            let cells = |position| grid.neighborhood(position, topology);
+            Self::run_with(particles, grid, topology, mirror, cells, schedule);
+        }
+        Ok(())
+    }
+
+    fn diagnostics_due(&self, _steps: u64) -> bool {
+        true
+    }
+
+    fn read_diagnostics(&mut self, fluid: Fluid<R>, runaway_speed2: f64) -> Result<Readout, Infallible> {
+        let p = &self.host.particles;
+        let n = p.len();
+        let args = DiagnosticsArgs {
+            fluid,
+            runaway_speed2,
+            id: p.id_view(),
+            velocity: p.velocity_view(),
+            density: p.density_view(),
+        };
+        let figures = (0..n.div_ceil(DIAGNOSTICS_RANGE))
+            .into_par_iter()
+            .map(|r| range_figures(r, DIAGNOSTICS_RANGE, n, &args))
+            .reduce(Diagnostics::default, Diagnostics::combine);
+        Ok(Readout { figures, live: n })
+    }
+
+    fn download(&mut self) -> Result<(), Infallible> {
+        Ok(())
+    }
+
+    fn host(&self) -> &HostParticles<R> {
+        &self.host
+    }
+
+    fn particle_bound(&self) -> usize {
+        self.host.particles.len()
+    }
+
+    fn memory_bytes(&self) -> usize {
+        let mirror = self.wall_mirror.as_ref().map_or(0, |m| 3 * m[0].len() * std::mem::size_of::<f64>());
+        let p = &self.host.particles;
+        p.capacity() * p.bytes_per_particle() + self.host.grid.bytes() + mirror
+    }
+}
+
+/// The CPU's passes: each kernel function over `n` particles with rayon.
+struct CpuPasses {
+    n: usize,
+}
+
+impl<R: Real, T: Topology, N: Neighbors + Sync> Passes<R, T, N> for CpuPasses {
+    fn density<K: DensityKernel>(&mut self, args: DensityArgs<'_, R, N>) {
+        launch(self.n, |i| density_pass::<R, K, N>(i, &args));
+    }
+    fn mirrored_wall(&mut self, args: MirroredWallArgs<'_, R, T>) {
+        launch(self.n, |i| mirrored_wall_pass(i, &args));
+    }
+    fn stress<Rh: Rheology<R>>(&mut self, args: StressArgs<'_, R, Rh, N>) {
+        launch(self.n, |i| stress_pass(i, &args));
+    }
+    fn shear_viscosity<Rh: Rheology<R>>(&mut self, args: ShearViscosityArgs<'_, R, Rh, N>) {
+        launch(self.n, |i| shear_viscosity_pass(i, &args));
+    }
+    fn velocity_gradient<Rh: Rheology<R>>(&mut self, args: VelocityGradientArgs<'_, R, Rh, N>) {
+        launch(self.n, |i| velocity_gradient_pass(i, &args));
+    }
+    fn acceleration<Op: ViscousOperator<R>>(&mut self, args: AccelerationArgs<'_, R, Op, N>) {
+        launch(self.n, |i| acceleration_pass(i, &args));
+    }
+    fn nozzle(&mut self, args: NozzleArgs<'_, R>) {
+        launch(self.n, |i| nozzle_pass(i, &args));
+    }
+    fn leapfrog(&mut self, args: LeapfrogArgs<'_, R, T>) {
+        launch(self.n, |i| leapfrog_pass(i, &args));
+    }
+}

@@ -1,0 +1,400 @@
+//! One run: the backend-neutral run state and a backend's particles, advanced step by step
+//! through Algorithm 1 by one schedule that every backend runs.
+
+pub mod backend;
+pub mod run_state;
+
+use crate::cpu::CpuBackend;
+use crate::inlet::Inlet;
+use crate::model::{Model, ParticleState};
+use crate::neighbor_grid::NeighborGrid;
+use crate::parallel::on_worker;
+use crate::particles::{HostParticles, Particles};
+use crate::scene::{DensityKernel, Scene, ViscousVelocity, Walls};
+use crate::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, InitialParticles};
+use crate::time_step::{Limit, StabilityBound, TimeStepper};
+use backend::{Backend, ParticleViews, Passes, Schedule};
+use coil_kernels::cell_grid::Neighbors;
+use coil_kernels::density::{DensityArgs, Poly6, Spiky};
+use coil_kernels::diagnostics::StateFigures;
+use coil_kernels::fluid::Fluid;
+use coil_kernels::leapfrog::LeapfrogArgs;
+use coil_kernels::mirrored_wall::MirroredWallArgs;
+use coil_kernels::nozzle::NozzleArgs;
+use coil_kernels::topology::{Open, Topology};
+use coil_kernels::{Real, Vec3};
+pub use run_state::RunState;
+use std::fmt;
+
+/// Why a run stopped early.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Instability {
+    pub step: u64,
+    pub time_s: f64,
+    /// Fluid particles with a non-finite velocity or a speed above the runaway limit.
+    pub bad_particles: usize,
+    pub max_speed_m_s: f64,
+    pub runaway_speed_m_s: f64,
+    pub dt_s: f64,
+    pub stability_bound_s: f64,
+    /// The velocity the viscous terms read.
+    pub viscous_velocity: ViscousVelocity,
+}
+
+impl fmt::Display for Instability {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "the run went unstable at step {} (t = {:.6e} s): {} particle(s) with a non-finite velocity or a speed above {:.3} m/s (largest finite speed {:.3e} m/s). ",
+            self.step, self.time_s, self.bad_particles, self.runaway_speed_m_s, self.max_speed_m_s
+        )?;
+        if self.dt_s > self.stability_bound_s {
+            write!(
+                f,
+                "Likely cause: dt = {:.3e} s is above the Eq. (10) bound {:.3e} s; lower simulation.time_step.fixed_s or safety_factor (the README gives how far above the bound each viscosity operator was measured to stay stable).",
+                self.dt_s, self.stability_bound_s
+            )
+        } else {
+            write!(
+                f,
+                "dt = {:.3e} s was within the Eq. (10) bound {:.3e} s; likely causes: free-surface tension from Eq. (6) at a high sound speed (set material.clamp_negative_pressure = true), a sound speed too low for the flow speed (walls give way above Mach 1), or particles injected into walls; or try a smaller simulation.time_step.safety_factor.",
+                self.dt_s, self.stability_bound_s
+            )
+        }
+    }
+}
+
+/// Figures of the state after a step, over fluid particles (see `coil_kernels::diagnostics`).
+pub type Diagnostics = StateFigures;
+
+/// Why a step stopped.
+#[derive(Debug)]
+pub enum StepError<F> {
+    Unstable(Instability),
+    /// The backend failed.
+    Backend(F),
+}
+
+impl<F: fmt::Display> fmt::Display for StepError<F> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StepError::Unstable(i) => i.fmt(f),
+            StepError::Backend(e) => e.fmt(f),
+        }
+    }
+}
+
+impl<F> From<Instability> for StepError<F> {
+    fn from(i: Instability) -> Self {
+        StepError::Unstable(i)
+    }
+}
+
+impl StepError<std::convert::Infallible> {
+    /// The instability, on a backend that cannot fail otherwise.
+    pub fn instability(self) -> Instability {
+        match self {
+            StepError::Unstable(i) => i,
+            StepError::Backend(never) => match never {},
+        }
+    }
+}
+
+/// A run on backend `B`: the run state, which every backend shares, and the particles, which
+/// `B` holds.
+pub struct Simulation<R: Real, M: Model<R>, B = CpuBackend<R>> {
+    pub run: RunState<R, M>,
+    pub backend: B,
+}
+
+/// A run's state and its particles in host memory, set up from a scene but not yet sorted: what
+/// a backend starts from.
+pub struct Setup<R: Real, M: Model<R>> {
+    pub run: RunState<R, M>,
+    pub host: HostParticles<R>,
+    /// Each wall particle's mirror image (m), x, y, z by id, when walls mirror the fluid
+    /// (`Walls::Mirrored`); not allocated otherwise.
+    pub wall_mirror: Option<[Vec<f64>; 3]>,
+}
+
+impl<R: Real, M: Model<R>> Setup<R, M> {
+    /// The run of `scene` with the particles `initial`.
+    pub fn new(scene: &Scene, initial: &InitialParticles, model: M) -> Self {
+        let mat = &scene.material;
+        let h = scene.support_radius();
+        let s = mat.particle_spacing_m;
+        let mass = calibrated_mass(mat.rest_density_kg_m3, s, h, mat.density_kernel);
+        let inlets: Vec<Inlet> = scene.inlets.iter().map(|c| Inlet::new(c, s, h, mass, mat.rest_density_kg_m3)).collect();
+        let fluid_capacity = scene.simulation.max_fluid_particles.unwrap_or(0).max(initial.fluid.len());
+        let boundary_count = initial.boundary.len();
+        let mut particles = Particles::with_capacity(boundary_count + fluid_capacity, M::FIELDS);
+        for (k, &x) in initial.boundary.iter().enumerate() {
+            particles.push(k as u32, x, [0.0; 3]);
+        }
+        for (k, (&x, &v)) in initial.fluid.iter().zip(&initial.fluid_velocity).enumerate() {
+            particles.push((boundary_count + k) as u32, x, v);
+        }
+        let g = mat.gravity_m_s2;
+        let fluid = Fluid {
+            mass: R::from_f64(mass),
+            rest_density: R::from_f64(mat.rest_density_kg_m3),
+            sound_speed2: R::from_f64(mat.sound_speed_m_s * mat.sound_speed_m_s),
+            pressure_floor: R::from_f64(if mat.clamp_negative_pressure { 0.0 } else { f64::NEG_INFINITY }),
+            pressure_pair_weight: R::from_f64(mat.pressure_gradient.pair_weight()),
+            gravity: Vec3::from_f64(g),
+            kernels: calibrated_kernels(mat.rest_density_kg_m3, s, h, mat.density_kernel),
+            boundary_count: boundary_count as u32,
+        };
+        let ts = &scene.simulation.time_step;
+        let stepper = TimeStepper {
+            bound: StabilityBound::new(h, mat.sound_speed_m_s, model.max_viscosity().to_f64()),
+            support_radius: h,
+            safety_factor: ts.safety_factor,
+            fixed: ts.fixed_s,
+        };
+        let d = &scene.domain;
+        let diagonal = (0..3).map(|a| (d.max_m[a] - d.min_m[a]).powi(2)).sum::<f64>().sqrt();
+        let g_norm = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+        let start_speed = fastest_start_speed(scene, initial);
+        // A sound wave that compresses the fluid by 10 %, more than weakly compressible SPH
+        // allows, moves it at 0.1 c; a full c let a run above the Eq. (10) bound throw
+        // particles at 7 times the jet's fastest speed unstopped (docs/tradeoff.md).
+        let runaway_speed = 2.0 * ((2.0 * g_norm * diagonal).sqrt() + start_speed) + 0.1 * mat.sound_speed_m_s;
+        let run = RunState {
+            fluid,
+            model,
+            inlets,
+            stepper,
+            time: 0.0,
+            steps: 0,
+            previous_dt: None,
+            removed: 0,
+            injected: 0,
+            fluid_capacity,
+            capacity_reached_at: None,
+            fluid_count: initial.fluid.len(),
+            next_id: (boundary_count + initial.fluid.len()) as u32,
+            diagnostics: Diagnostics { max_speed: start_speed, ..Diagnostics::default() },
+            runaway_speed,
+            last_dt: 0.0,
+            last_limit: Limit::Acoustic,
+            density_kernel: mat.density_kernel,
+            viscous_velocity: ts.viscous_velocity,
+        };
+        let wall_mirror = (scene.simulation.walls == Walls::Mirrored)
+            .then(|| [0, 1, 2].map(|a| initial.boundary_mirror.iter().map(|m| m[a]).collect()));
+        let mut grid = NeighborGrid::new(d.min_m, d.max_m, h, d.periodic, boundary_count + fluid_capacity);
+        if wall_mirror.is_none() {
+            grid.track_fluid(boundary_count as u32);
+        }
+        Self { run, host: HostParticles { particles, grid }, wall_mirror }
+    }
+}
+
+impl<R: Real, M: Model<R>> Simulation<R, M> {
+    /// Sets up a run of `scene` with the particles `initial` on the CPU backend.
+    pub fn new(scene: &Scene, initial: &InitialParticles, model: M) -> Self {
+        Self::started(Setup::new(scene, initial, model), true)
+    }
+
+    /// A run on the CPU backend that visits neighbors through the grid, as a device does, not
+    /// through lists: for counting the device's work, and for checking that both loops agree.
+    pub fn for_device(scene: &Scene, initial: &InitialParticles, model: M) -> Self {
+        Self::started(Setup::new(scene, initial, model), false)
+    }
+
+    fn started(setup: Setup<R, M>, lists: bool) -> Self {
+        let mut sim = Self::on_cpu(setup, lists);
+        let Ok(()) = sim.sort_and_density();
+        sim
+    }
+
+    /// The run `setup` on the CPU, with neighbor lists or not; fresh runs then start with
+    /// [`Self::sort_and_density`].
+    pub fn on_cpu(setup: Setup<R, M>, lists: bool) -> Self {
+        let Setup { run, host, wall_mirror } = setup;
+        let backend = CpuBackend::new(host, wall_mirror, run.fluid.kernels.h2, lists);
+        Self { run, backend }
+    }
+
+    /// The particles in their current order.
+    pub fn particles(&self) -> &Particles<R> {
+        &self.backend.host().particles
+    }
+
+    /// The particles, to set a state by hand (checks, tests).
+    pub fn particles_mut(&mut self) -> &mut Particles<R> {
+        self.backend.particles_mut()
+    }
+}
+
+impl<R: Real, M: Model<R>, B: Backend<R>> Simulation<R, M, B> {
+    /// Algorithm 1, lines 3-8, once before the first step: the first sort and density.
+    pub fn sort_and_density(&mut self) -> Result<(), B::Fault> {
+        let removed = self.backend.sort_and_reorder()?;
+        self.run.count_removed(removed);
+        in_topology(&mut self.backend, DensityPass { run: &self.run })
+    }
+
+    /// dt for the next step and what limits it.
+    pub fn next_dt(&self) -> (f64, Limit) {
+        self.run.next_dt()
+    }
+
+    /// One step of Algorithm 1 with the automatic (or fixed) dt.
+    pub fn step(&mut self) -> Result<(), StepError<B::Fault>> {
+        let (dt, limit) = self.next_dt();
+        self.step_with(dt, limit)
+    }
+
+    /// One step of Algorithm 1 with a given dt (s).
+    pub fn step_with(&mut self, dt: f64, limit: Limit) -> Result<(), StepError<B::Fault>> {
+        on_worker(|| {
+            // Line 1: inject.
+            let (staging, room) = self.backend.inlet_staging();
+            let added = self.run.inject(dt, room, staging);
+            self.backend.append_staged(added).map_err(StepError::Backend)?;
+            // Line 3: neighbors.
+            let removed = self.backend.sort_and_reorder().map_err(StepError::Backend)?;
+            self.run.count_removed(removed);
+            // Lines 5-19: density and pressure, stress, accelerations, nozzles, leap-frog.
+            let kick_dt = self.run.kick_dt(dt);
+            in_topology(&mut self.backend, ForcesAndMotion { run: &self.run, dt, kick_dt }).map_err(StepError::Backend)?;
+            self.run.advance_clock(dt, limit);
+            if self.backend.diagnostics_due(self.run.steps) {
+                self.read_diagnostics()?;
+            }
+            Ok(())
+        })
+    }
+
+    /// Reads the diagnostics and the particle count; stops an unstable run.
+    fn read_diagnostics(&mut self) -> Result<(), StepError<B::Fault>> {
+        let runaway_speed2 = self.run.runaway_speed * self.run.runaway_speed;
+        let readout = self.backend.read_diagnostics(self.run.fluid, runaway_speed2).map_err(StepError::Backend)?;
+        self.run.record(readout);
+        Ok(self.run.check()?)
+    }
+
+    /// Reads the diagnostics and brings the host's particles up to date (before frames, at the
+    /// end); stops an unstable run.
+    pub fn sync(&mut self) -> Result<(), StepError<B::Fault>> {
+        self.read_diagnostics()?;
+        self.backend.download().map_err(StepError::Backend)
+    }
+
+    /// The particles in host memory and their grid (current after [`Self::sync`]).
+    pub fn host(&self) -> &HostParticles<R> {
+        self.backend.host()
+    }
+
+    /// Whether the run state holds everything the next step reads (a device's figures and
+    /// counts come back every few steps): where a stop may checkpoint the run, so that it
+    /// resumes as if it had never stopped.
+    pub fn settled(&self) -> bool {
+        self.backend.diagnostics_due(self.run.steps)
+    }
+}
+
+/// Runs `schedule` on `backend` in the domain's topology: the periodic neighbor loops only where
+/// an axis wraps.
+fn in_topology<R: Real, B: Backend<R>, S: Schedule<R>>(backend: &mut B, schedule: S) -> Result<(), B::Fault> {
+    match backend.periodic() {
+        Some(periodic) => backend.run(periodic, schedule),
+        None => backend.run(Open, schedule),
+    }
+}
+
+/// Algorithm 1, lines 5-8: density (pressure is evaluated from it where it is read).
+struct DensityPass<'r, R: Real, M: Model<R>> {
+    run: &'r RunState<R, M>,
+}
+
+impl<R: Real, M: Model<R>> Schedule<R> for DensityPass<'_, R, M> {
+    fn run<T: Topology, N: Neighbors, P: Passes<R, T, N>>(self, v: ParticleViews<'_, R, T, N>, passes: &mut P) {
+        density(self.run, &v, passes);
+    }
+}
+
+fn density<R: Real, M: Model<R>, T: Topology, N: Neighbors, P: Passes<R, T, N>>(
+    run: &RunState<R, M>,
+    v: &ParticleViews<'_, R, T, N>,
+    passes: &mut P,
+) {
+    let args = DensityArgs { neighborhood: v.neighbors, fluid: run.fluid, density: v.density };
+    match run.density_kernel {
+        DensityKernel::Poly6 => passes.density::<Poly6>(args),
+        DensityKernel::Spiky => passes.density::<Spiky>(args),
+    }
+}
+
+/// Algorithm 1, lines 5-19: density, mirrored walls (when the scene asks), velocity gradient
+/// and stress, accelerations, nozzles and leap-frog.
+struct ForcesAndMotion<'r, R: Real, M: Model<R>> {
+    run: &'r RunState<R, M>,
+    /// This step (s).
+    dt: f64,
+    /// Leap-frog's kick (s).
+    kick_dt: f64,
+}
+
+impl<R: Real, M: Model<R>> Schedule<R> for ForcesAndMotion<'_, R, M> {
+    fn run<T: Topology, N: Neighbors, P: Passes<R, T, N>>(self, v: ParticleViews<'_, R, T, N>, passes: &mut P) {
+        let run = self.run;
+        let fluid = run.fluid;
+        // Lines 5-8.
+        density(run, &v, passes);
+        let viscous_velocity = match run.viscous_velocity {
+            ViscousVelocity::FullStep => v.velocity,
+            ViscousVelocity::HalfStep => v.velocity_half,
+        };
+        if let Some(mirror) = v.wall_mirror {
+            passes.mirrored_wall(MirroredWallArgs {
+                neighborhood: v.grid,
+                fluid,
+                id: v.id,
+                mirror,
+                velocity: viscous_velocity,
+                density: v.density,
+            });
+        }
+        // Lines 9-16: velocity gradient and stress, accelerations.
+        run.model.accelerations(
+            passes,
+            ParticleState {
+                neighborhood: v.neighbors,
+                fluid,
+                id: v.id,
+                velocity: viscous_velocity.read(),
+                density: v.density.read(),
+                stress: v.stress,
+                viscosity: v.viscosity,
+                velocity_gradient: v.velocity_gradient,
+                acceleration: v.acceleration,
+            },
+        );
+        // Fluid inside a nozzle's tube moves with the jet (paper Sec. III-C; see `nozzle`).
+        for tube in run.inlet_tubes() {
+            passes.nozzle(NozzleArgs {
+                fluid,
+                tube,
+                id: v.id,
+                position: v.position.read(),
+                acceleration: v.acceleration,
+                velocity_half: v.velocity_half,
+            });
+        }
+        // Lines 17-19: leap-frog.
+        passes.leapfrog(LeapfrogArgs {
+            fluid,
+            dt: R::from_f64(self.dt),
+            kick_dt: R::from_f64(self.kick_dt),
+            id: v.id,
+            acceleration: v.acceleration.read(),
+            position: v.position,
+            velocity_half: v.velocity_half,
+            velocity: v.velocity,
+            topology: v.topology,
+        });
+    }
+}

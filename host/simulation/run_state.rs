@@ -1,0 +1,172 @@
+//! The state of a run that is the same on every backend: the fluid's constants, the physics
+//! variant, the clock and time step, the inlets, the particle counts and the guard.
+
+use super::{Diagnostics, Instability};
+use crate::inlet::Inlet;
+use crate::model::Model;
+use crate::particles::Particles;
+use crate::scene::{DensityKernel, ViscousVelocity};
+use crate::time_step::{Limit, TimeStepper};
+use coil_kernels::fluid::Fluid;
+use coil_kernels::nozzle::NozzleTube;
+use coil_kernels::Real;
+
+pub struct RunState<R: Real, M: Model<R>> {
+    pub fluid: Fluid<R>,
+    pub model: M,
+    pub(crate) inlets: Vec<Inlet>,
+    pub stepper: TimeStepper,
+    /// Simulated time (s).
+    pub time: f64,
+    pub steps: u64,
+    pub(crate) previous_dt: Option<f64>,
+    /// Fluid particles removed for leaving the domain box.
+    pub removed: u64,
+    /// Fluid particles injected by inlets.
+    pub injected: u64,
+    pub(crate) fluid_capacity: usize,
+    /// When (s) an inlet first had a layer due that the fluid capacity could not take; from
+    /// then on the jets run only as particles leave the domain.
+    pub capacity_reached_at: Option<f64>,
+    pub(crate) fluid_count: usize,
+    pub(crate) next_id: u32,
+    /// Figures of the fluid after the last readout; the velocity CFL reads its largest speed.
+    pub diagnostics: Diagnostics,
+    /// A speed no particle can reach physically (m/s): twice the free fall across the domain
+    /// plus the fastest jet, plus 0.1 c.
+    pub runaway_speed: f64,
+    pub last_dt: f64,
+    pub last_limit: Limit,
+    /// The kernel of Eq. (5): which monomorphised density pass each step launches.
+    pub density_kernel: DensityKernel,
+    /// Which velocity the viscous terms read.
+    pub viscous_velocity: ViscousVelocity,
+}
+
+impl<R: Real, M: Model<R>> RunState<R, M> {
+    /// Fluid particles now in the run.
+    pub fn fluid_count(&self) -> usize {
+        self.fluid_count
+    }
+
+    pub fn boundary_count(&self) -> usize {
+        self.fluid.boundary_count as usize
+    }
+
+    /// The run's inlets.
+    pub fn inlets(&self) -> &[Inlet] {
+        &self.inlets
+    }
+
+    /// Fluid particles the run has room for: the initial fluid plus all inlets may inject.
+    pub fn fluid_capacity(&self) -> usize {
+        self.fluid_capacity
+    }
+
+    /// Each inlet's nozzle tube now.
+    pub fn inlet_tubes(&self) -> impl Iterator<Item = NozzleTube<R>> + '_ {
+        self.inlets.iter().map(|inlet| inlet.tube(self.time))
+    }
+
+    /// dt for the next step and what limits it.
+    pub fn next_dt(&self) -> (f64, Limit) {
+        self.stepper.next(self.diagnostics.max_speed)
+    }
+
+    /// Algorithm 1, line 1: every inlet appends to `staging` the layers due after `dt` from
+    /// now, within `room` particles in all and the fluid capacity. Returns how many it added.
+    pub(crate) fn inject(&mut self, dt: f64, room: usize, staging: &mut Particles<R>) -> usize {
+        let room = room.min(self.fluid_capacity - self.fluid_count);
+        let mut added = 0;
+        for inlet in &mut self.inlets {
+            added += inlet.inject(self.time, dt, room - added, &mut self.next_id, staging);
+        }
+        self.count_injected(added);
+        added
+    }
+
+    /// Counts the particles an injection added, and notes when the inlets first found the
+    /// fluid capacity full.
+    fn count_injected(&mut self, added: usize) {
+        self.fluid_count += added;
+        self.injected += added as u64;
+        let room = self.fluid_capacity - self.fluid_count;
+        if self.capacity_reached_at.is_none() && self.inlets.iter().any(|inlet| inlet.starved(room)) {
+            self.capacity_reached_at = Some(self.time);
+        }
+    }
+
+    /// Counts particles the sort dropped for leaving the domain.
+    pub(crate) fn count_removed(&mut self, removed: usize) {
+        self.removed += removed as u64;
+        self.fluid_count -= removed;
+    }
+
+    /// Leap-frog's kick: half of this and the previous step (half of this one at the start).
+    pub(crate) fn kick_dt(&self, dt: f64) -> f64 {
+        match self.previous_dt {
+            Some(prev) => 0.5 * (prev + dt),
+            None => 0.5 * dt,
+        }
+    }
+
+    /// The clock after a step of `dt` (s) limited by `limit`.
+    pub(crate) fn advance_clock(&mut self, dt: f64, limit: Limit) {
+        self.previous_dt = Some(dt);
+        self.time += dt;
+        self.steps += 1;
+        self.last_dt = dt;
+        self.last_limit = limit;
+    }
+
+    /// Sets the clock as a checkpoint left it: time (s), steps, and the last step's dt (s) and
+    /// limit (`previous_dt` None before the first step).
+    pub(crate) fn restore_clock(&mut self, time: f64, steps: u64, previous_dt: Option<f64>, last_dt: f64, last_limit: Limit) {
+        self.time = time;
+        self.steps = steps;
+        self.previous_dt = previous_dt;
+        self.last_dt = last_dt;
+        self.last_limit = last_limit;
+    }
+
+    /// Sets the particle counts as a checkpoint left them.
+    pub(crate) fn restore_counts(
+        &mut self,
+        fluid_count: usize,
+        removed: u64,
+        injected: u64,
+        next_id: u32,
+        capacity_reached_at: Option<f64>,
+    ) {
+        self.fluid_count = fluid_count;
+        self.removed = removed;
+        self.injected = injected;
+        self.next_id = next_id;
+        self.capacity_reached_at = capacity_reached_at;
+    }
+
+    /// Takes in a diagnostics readout: its figures, and the particles the sorts dropped since
+    /// the last one that were not counted then.
+    pub(crate) fn record(&mut self, readout: super::backend::Readout) {
+        self.diagnostics = readout.figures;
+        let fluid_now = readout.live - self.boundary_count();
+        self.count_removed(self.fluid_count - fluid_now);
+    }
+
+    /// The guard: the latest diagnostics must show no runaway particle.
+    pub(crate) fn check(&self) -> Result<(), Instability> {
+        if self.diagnostics.bad_particles == 0 {
+            return Ok(());
+        }
+        Err(Instability {
+            step: self.steps,
+            time_s: self.time,
+            bad_particles: self.diagnostics.bad_particles as usize,
+            max_speed_m_s: self.diagnostics.max_speed,
+            runaway_speed_m_s: self.runaway_speed,
+            dt_s: self.last_dt,
+            stability_bound_s: self.stepper.bound.dt().0,
+            viscous_velocity: self.viscous_velocity,
+        })
+    }
+}
