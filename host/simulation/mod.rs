@@ -229,11 +229,16 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
 }
 
 impl<R: Real, M: Model<R>, B: Backend<R>> Simulation<R, M, B> {
-    /// Algorithm 1, lines 3-8, once before the first step: the first sort and density.
+    /// Algorithm 1, lines 3-8, once before the first step: the first sort and density, with
+    /// the particle count read back and the host's particles current, for the first frame. The
+    /// diagnostics keep the speed the fluid starts at, which the first dt reads.
     pub fn sort_and_density(&mut self) -> Result<(), B::Fault> {
         let removed = self.backend.sort_and_reorder()?;
         self.run.count_removed(removed);
-        in_topology(&mut self.backend, DensityPass { run: &self.run })
+        in_topology(&mut self.backend, DensityPass { run: &self.run })?;
+        let readout = self.backend.read_diagnostics(self.run.fluid, 0.0)?;
+        self.run.count_live(readout.live);
+        self.backend.download()
     }
 
     /// dt for the next step and what limits it.

@@ -149,7 +149,13 @@ impl<R: Real, M: Model<R>> RunState<R, M> {
     /// the last one that were not counted then.
     pub(crate) fn record(&mut self, readout: super::backend::Readout) {
         self.diagnostics = readout.figures;
-        let fluid_now = readout.live - self.boundary_count();
+        self.count_live(readout.live);
+    }
+
+    /// Counts as removed the fluid particles missing from the `live` particles (boundary
+    /// included) that a backend reports.
+    pub(crate) fn count_live(&mut self, live: usize) {
+        let fluid_now = live - self.boundary_count();
         self.count_removed(self.fluid_count - fluid_now);
     }
 
