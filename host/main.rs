@@ -158,7 +158,7 @@ enum Command {
     /// tank, the Taylor-Green vortex, the spreading torus of Fig. 3, Huppert's viscous
     /// spreading, and jet buckling from high and low nozzles), print each error next to its
     /// tolerance, and write PNG plots of simulated against reference profiles. Exits 1 when a
-    /// binding case fails; the paper's operator below the issue's resolution and on the Cross
+    /// binding case fails; the paper's operator below the binding resolution and on the Cross
     /// cases is shown for comparison.
     Validate {
         /// Coarser resolutions and no jets: about 5 minutes on 2 cores, against about 40 minutes.
@@ -433,7 +433,7 @@ fn finish_run(result: Result<Summary, RunError>, out_dir: &Path) -> ExitCode {
                     );
                     if i.viscous_velocity == ViscousVelocity::FullStep {
                         eprintln!(
-                            "`coil resume {} --set simulation.time_step.viscous_velocity=half_step` continues it at the same dt, the viscous terms reading the half-step velocity, which leap-frog keeps stable to twice the damping rate (README, Trade-off)",
+                            "`coil resume {} --set simulation.time_step.viscous_velocity=half_step` continues it at the same dt, the viscous terms reading the half-step velocity, which leap-frog keeps stable to twice the damping rate (docs/tradeoff.md)",
                             out_dir.display()
                         );
                     }
@@ -536,7 +536,7 @@ fn validate_command(quick: bool, only: &[ValidationGroup], out: &Path) -> Result
     let resolutions: &[usize] = if quick { &[10, 20] } else { &[10, 20, 30] };
     let cross_across = if quick { 10 } else { 20 };
     type Case<'a> = Box<dyn Fn() -> Result<Vec<CaseResult>, String> + 'a>;
-    // Whether a case's tolerance decides the verdict. The issue holds the paper's operator to
+    // Whether a case's tolerance decides the verdict. The validation holds the paper's operator to
     // its tolerance at 30 across (40 for the vortex); coarser runs show its convergence, and
     // its Cross cases, which its odd-even mode keeps above 3 %, are there for comparison.
     // Under hourglass control, which removes that mode, it is held to every tolerance but
@@ -600,8 +600,7 @@ fn validate_command(quick: bool, only: &[ValidationGroup], out: &Path) -> Result
     let torus_spacing = if quick { 0.04 } else { 0.03 };
     cases.push((ValidationGroup::Torus, true, Box::new(move || torus_ordering(torus_spacing, 0.3).map(|r| vec![r]))));
     // The paper's operator is shown for comparison: it approaches the law too slowly to meet
-    // the exponent's 10 % at 8 and 10 across, with or without hourglass control (README,
-    // Validation).
+    // the exponent's 10 % at 8 and 10 across, with or without hourglass control (docs/validation.md).
     let release_across = if quick { 8 } else { 10 };
     for (op, hg) in operators {
         cases.push((

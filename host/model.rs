@@ -192,7 +192,8 @@ impl<R: Real> Model<R> for LaplacianModel<R> {
         self.0.max_viscosity()
     }
     fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
-        backend.acceleration(s.acceleration_args(VelocityLaplacian { nu0: self.0.nu0, velocity: s.velocity }));
+        let mu0 = self.0.nu0 * s.fluid.rest_density;
+        backend.acceleration(s.acceleration_args(VelocityLaplacian { mu0, velocity: s.velocity }));
     }
 }
 

@@ -306,7 +306,7 @@ pub enum ViscousVelocity {
     FullStep,
     /// v_{n-1/2}: the viscous force lags dt / 2 (first order in time) and is stable for
     /// lambda dt < 2, which keeps two particles closing in a thinned jet stable at the
-    /// Eq. (10) bound (README, Trade-off).
+    /// Eq. (10) bound (docs/tradeoff.md).
     HalfStep,
 }
 

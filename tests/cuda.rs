@@ -3,7 +3,8 @@
 //! The PTX argument layouts are checked everywhere (no GPU needed). The rest runs on the
 //! emulated device everywhere (`Gpu::emulated`: the backend's host side launching the kernels'
 //! host builds), and again on a CUDA device where one is present; without one each test prints
-//! "skipped: no CUDA device".
+//! "skipped: no CUDA device", or fails where `COIL_REQUIRE_GPU=1` (on a GPU machine, so that a
+//! driver that cannot be reached is not mistaken for a pass).
 #![cfg(feature = "cuda")]
 
 mod common;
@@ -168,10 +169,12 @@ impl Engine {
     }
 }
 
-/// The emulated device, and a CUDA device or a visible skip.
+/// The emulated device, and a CUDA device or a visible skip (a failure where
+/// `COIL_REQUIRE_GPU=1`).
 fn engines() -> Vec<Engine> {
     match Gpu::open() {
         Ok(_) => vec![Engine::Emulated, Engine::Cuda],
+        Err(e) if std::env::var("COIL_REQUIRE_GPU").is_ok_and(|v| v == "1") => panic!("COIL_REQUIRE_GPU=1: {e}"),
         Err(e) => {
             println!("skipped: no CUDA device ({e}); ran on the emulated device only");
             vec![Engine::Emulated]
@@ -792,7 +795,7 @@ fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
     files
 }
 
-/// Bytes the device holds once `model`'s run of `scene` is on it, and what the run counts (`device_bytes`, the figure `coil run` prints and the README's memory table comes from).
+/// Bytes the device holds once `model`'s run of `scene` is on it, and what the run counts (the figure `coil run` prints and docs/benchmark.md's memory table comes from).
 fn held_and_counted<R: Real, M: Model<R>>(scene: &Scene, model: M) -> (usize, usize) {
     let initial = initial_particles(scene, "dam_break.toml").expect("particles");
     let mut on_gpu =

@@ -810,7 +810,7 @@ impl Ball {
         let paper = StressDivergence { stress: stress.read() };
         let controlled =
             HourglassControlledStress { coefficient: 1.0, velocity, gradient: gradient.read(), viscosity: viscosity.read() };
-        let muller = VelocityLaplacian { nu0, velocity };
+        let muller = VelocityLaplacian { mu0: nu0 * fluid.rest_density.to_f64(), velocity };
         let morris = MorrisViscosity { velocity, viscosity: Newtonian { nu0 } };
         [
             (0..n).map(|i| acceleration(i, &nb, &density, &fluid, &paper)).collect(),
@@ -848,7 +848,7 @@ fn rigid_rotation_spin_down_rates() -> [f64; 4] {
 /// the surface particles weighs more under the symmetric pair weight than it did under
 /// nu / rho_j: 14.0 1/s then, and 315 1/s for Morris's); nu / R^2 = 81.6 1/s. It matches the
 /// jet runs: the operators that leave rotation nearly free buckle the rope and swing the pile,
-/// the Laplacians do neither (README, jet buckling). The bounds leave a factor of two either
+/// the Laplacians do neither (docs/validation.md, jet buckling). The bounds leave a factor of two either
 /// side of the measured figures.
 #[test]
 fn the_laplacians_brake_a_rigid_rotation_that_the_papers_operator_leaves_nearly_free() {
@@ -971,18 +971,16 @@ fn is_positive_definite(mut a: Vec<f64>, dof: usize) -> bool {
 /// with a free surface, sum_i m v_i · a_i <= 0, that is, minus the symmetric part of the
 /// viscous matrix is positive semidefinite. Shifted by 1e-9 of the matrix's largest row sum
 /// (the null modes, uniform translations, need the shift) it must admit a Cholesky
-/// factorisation. Eq. (8) then (9) and Morris's symmetric pair weight pass; Müller's Laplacian,
-/// whose pair weight m / rho_j is not symmetric where densities differ, does not (a field
-/// gains energy under it at 21 1/s), nor did Morris's operator and hourglass control when they
-/// weighed pairs by nu / rho_j (25 1/s for Morris's). Each operator that passes also conserves
-/// momentum exactly: the accelerations of any field sum to zero (Müller's: up to 695 1/s for a
-/// unit velocity, against a largest row sum of 7 500 1/s).
+/// factorisation. Each operator weighs a pair symmetrically in i and j (Eq. (8) then (9);
+/// Müller's Laplacian by mu0 / (rho_i rho_j); Morris's by (mu_i + mu_j) / (2 rho_i rho_j)), so
+/// each also conserves momentum exactly: the accelerations of any field sum to zero. Müller's
+/// printed weight nu0 / rho_j did neither (a field gained energy at 21 1/s, and a unit
+/// velocity left up to 695 1/s of net acceleration against a largest row sum of 7 500 1/s).
 #[test]
-fn the_viscous_operators_but_mullers_never_create_kinetic_energy_or_momentum_at_a_free_surface() {
+fn the_viscous_operators_never_create_kinetic_energy_or_momentum_at_a_free_surface() {
     let (dof, matrices) = free_surface_viscous_matrices();
-    let conserving =
-        [("the paper's operator", true), ("hourglass control", true), ("Müller's Laplacian", false), ("Morris's operator", true)];
-    for ((name, conserves), l) in conserving.into_iter().zip(&matrices) {
+    let names = ["the paper's operator", "hourglass control", "Müller's Laplacian", "Morris's operator"];
+    for (name, l) in names.into_iter().zip(&matrices) {
         let decay: Vec<f64> = (0..dof * dof).map(|k| -0.5 * (l[k] + l[(k % dof) * dof + k / dof])).collect();
         let scale = (0..dof).map(|r| (0..dof).map(|c| decay[r * dof + c].abs()).sum::<f64>()).fold(0.0, f64::max);
         let mut shifted = decay;
@@ -994,7 +992,7 @@ fn the_viscous_operators_but_mullers_never_create_kinetic_energy_or_momentum_at_
             .map(|(c, k)| (0..dof / 3).map(|i| l[(3 * i + k) * dof + c]).sum::<f64>().abs())
             .fold(0.0, f64::max);
         eprintln!("{name}: dissipative {dissipative}, largest net acceleration {net_force:.2e} 1/s against {scale:.2e}");
-        assert_eq!(dissipative, conserves, "{name}: dissipative {dissipative}");
-        assert_eq!(net_force < 1e-12 * scale, conserves, "{name}: net acceleration {net_force} 1/s");
+        assert!(dissipative, "{name}: creates kinetic energy");
+        assert!(net_force < 1e-12 * scale, "{name}: net acceleration {net_force} 1/s");
     }
 }

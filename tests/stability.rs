@@ -131,7 +131,7 @@ fn above_the_viscous_bound_each_operator_runs_to_its_measured_limit_and_the_guar
 /// runs at 8 times with the half step within the start-up case's 3 % of the peak, while the
 /// full step is stopped. Measured: 0.0116 at 0.2 s, against 0.0094 at the bound, where the
 /// lagged viscous force shows in the 50 steps to 0.2 s (at 20 across the errors at 1 and 8 times
-/// the bound are the same to 4 digits; README, Trade-off).
+/// the bound are the same to 4 digits; docs/tradeoff.md).
 #[test]
 fn reading_the_half_step_velocity_doubles_the_room_above_the_bound() {
     use coil::scene::{ViscosityOperator::Laplacian, ViscousVelocity};
@@ -338,5 +338,5 @@ fn a_high_sound_speed_channel_stays_laminar_with_the_spiky_density() {
     let (spiky, error) = wall_normal(DensityKernel::Spiky);
     assert!(spiky < 1e-3 && error < 0.03, "spiky density: wall-normal speed {spiky:.3e}, error {error:.4} of the peak");
     let (poly6, _) = wall_normal(DensityKernel::Poly6);
-    assert!(poly6 > 0.1, "poly6 density: wall-normal speed {poly6:.3e} of the peak; the README's flutter is gone");
+    assert!(poly6 > 0.1, "poly6 density: wall-normal speed {poly6:.3e} of the peak; the flutter docs/scene-format.md describes is gone");
 }

@@ -42,7 +42,7 @@ fn the_cross_reference_is_the_parabola_when_the_fluid_is_newtonian_and_faster_wh
 
 /// Mirrored walls put the no-slip plane on the wall surface, and the calibrated kernels make
 /// the Laplacian exact on the lattice: what is left is the discretisation error, which must
-/// meet the 3 % already at 20 across and fall with resolution (measured: 0.011 at 10,
+/// meet the 3 % tolerance already at 20 across and fall with resolution (measured: 0.011 at 10,
 /// 0.0033 at 20).
 #[test]
 fn startup_poiseuille_converges_with_resolution_laplacian() {
@@ -54,7 +54,7 @@ fn startup_poiseuille_converges_with_resolution_laplacian() {
 }
 
 /// The steady Cross channel with Morris's operator carrying each particle's nu(D): within the
-/// issue's 3 % of the centre speed already at 10 across, for a mild and a strong thinning
+/// the 3 % tolerance of the centre speed already at 10 across, for a mild and a strong thinning
 /// (measured: 0.018 at K = 10 s and 0.022 at K = 100 s). The paper's operator at the same resolution shows the odd-even
 /// staircase of Eq. (8) then (9) (measured 0.229 at K = 10 s, n = 0.5).
 #[test]
@@ -117,7 +117,7 @@ fn the_hydrostatic_tank_holds_rho0_g_depth_and_eq7_doubles_it() {
     assert!((full.pressure_ratio - 1.0).abs() < 0.05, "{}", full.pressure_ratio);
 }
 
-/// The Taylor-Green vortex decays at 8 pi^2 nu / L^2 within the 5 % (measured: the
+/// The Taylor-Green vortex decays at 8 pi^2 nu / L^2 within the 5 % tolerance (measured: the
 /// Laplacian 0.009 off at 20 across; the paper's operator 0.061 at 20, 0.015 at 40, second
 /// order).
 #[test]
@@ -350,8 +350,8 @@ fn the_front_radius_reads_huppert_profiles_and_the_law_inverts() {
 }
 
 /// Huppert's spreading at 6 particles across the released radius with Morris's operator: the
-/// fitted exponent and prefactor within the 10 % (measured: 0.071 and 0.040; at 8
-/// across the exponent's error is 0.091, at 10 across 0.057; README, Huppert).
+/// fitted exponent and prefactor within the 10 % tolerance (measured: 0.071 and 0.040; at 8
+/// across the exponent's error is 0.091, at 10 across 0.057; docs/validation.md, Huppert).
 #[test]
 fn huppert_spreading_follows_the_similarity_law_with_morris() {
     use coil::validation::huppert::{simulate, Release, HUPPERT_PREFACTOR};

@@ -51,7 +51,7 @@ impl fmt::Display for Instability {
         if self.dt_s > self.stability_bound_s {
             write!(
                 f,
-                "Likely cause: dt = {:.3e} s is above the Eq. (10) bound {:.3e} s; lower simulation.time_step.fixed_s or safety_factor (the README gives how far above the bound each viscosity operator was measured to stay stable).",
+                "Likely cause: dt = {:.3e} s is above the Eq. (10) bound {:.3e} s; lower simulation.time_step.fixed_s or safety_factor (docs/tradeoff.md gives how far above the bound each viscosity operator was measured to stay stable).",
                 self.dt_s, self.stability_bound_s
             )
         } else {

@@ -39,7 +39,7 @@ pub struct LeapfrogArgs<'a, R, T = Open> {
 /// stable only for z < 1, and the half step v_{n+1/2} = (1 - z) v_{n-1/2}, stable for z < 2.
 /// The stiffest such mode is two particles closing in a thinned jet, where the clamped pressure
 /// holds nothing apart: at 12 particles across the jet's diameter it grew 1.5 times a step at
-/// the Eq. (10) bound with the full step (README, Trade-off).
+/// the Eq. (10) bound with the full step (docs/tradeoff.md).
 #[inline(always)]
 pub fn leapfrog_pass<R: Real, T: Topology>(i: usize, a: &LeapfrogArgs<R, T>) {
     if a.fluid.is_boundary(a.id.at(i)) {

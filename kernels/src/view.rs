@@ -7,6 +7,15 @@
 
 use core::marker::PhantomData;
 
+/// Panics off the device where `i` is past a view of `len` elements.
+#[inline(always)]
+fn check_index(i: usize, len: usize) {
+    #[cfg(not(target_arch = "nvptx64"))]
+    assert!(i < len, "index {i} past a view of {len} elements");
+    #[cfg(target_arch = "nvptx64")]
+    let _ = (i, len);
+}
+
 /// A read-only view of `len` elements.
 #[repr(C)]
 #[derive(Debug)]
@@ -51,11 +60,15 @@ impl<'a, T: Copy> View<'a, T> {
         self.len == 0
     }
 
+    /// Entry `i`. Off the device an index past the view panics; on the device it is not
+    /// checked (a trap there would cost every neighbor read), and kernels index only below the
+    /// count the host sized the view to, which the CPU backend, running the same kernels
+    /// checked, tests.
     #[inline(always)]
     pub fn at(&self, i: usize) -> T {
-        debug_assert!(i < self.len);
-        // SAFETY: callers index particles below the count the backend sized the view to; the
-        // debug build checks it.
+        check_index(i, self.len);
+        // SAFETY: `i < len` (checked off the device; on it, the invariant above), and `ptr`
+        // holds `len` initialised elements.
         unsafe { *self.ptr.add(i) }
     }
 }
@@ -104,9 +117,10 @@ impl<'a, T: Copy> ViewMut<'a, T> {
         self.len == 0
     }
 
+    /// Entry `i`, checked as [`View::at`] is.
     #[inline(always)]
     pub fn at(&self, i: usize) -> T {
-        debug_assert!(i < self.len);
+        check_index(i, self.len);
         // SAFETY: as for `View::at`.
         unsafe { *self.ptr.add(i) }
     }
