@@ -637,8 +637,9 @@ fn sorted_lattice(
 /// with hourglass control of weight `coefficient`, and by Morris's operator; nu = 0.1 m^2/s.
 fn lattice_viscous_accelerations(velocity_at: impl Fn([f64; 3]) -> [f64; 3], coefficient: f64) -> (Vec3<f64>, Vec3<f64>) {
     use coil::particles::{mat3_view_mut, vec3_view, ModelFields};
-    use coil_kernels::acceleration::{acceleration, MorrisViscosity};
-    use coil_kernels::hourglass_control::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
+    use coil_kernels::acceleration::acceleration;
+    use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
+    use coil_kernels::viscosity::hourglass_ganzenmuller2015::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
     use coil_kernels::view::ViewMut;
     let nu0 = 0.1;
     let fields = ModelFields { viscosity: true, velocity_gradient: true, ..ModelFields::default() };
@@ -790,9 +791,12 @@ impl Ball {
     /// nu = 0.1 m^2/s: by the paper's operator, with hourglass control 1, Müller's and Morris's.
     fn viscous_accelerations(&mut self, velocity: &[Vec<f64>; 3]) -> [Vec<Vec3<f64>>; 4] {
         use coil::particles::{mat3_view_mut, stress_view_mut, vec3_view};
-        use coil_kernels::acceleration::{acceleration, MorrisViscosity, StressDivergence, VelocityLaplacian};
-        use coil_kernels::hourglass_control::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
-        use coil_kernels::velocity_gradient::{stress_pass, StressArgs};
+        use coil_kernels::acceleration::acceleration;
+        use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
+        use coil_kernels::viscosity::stress_andrade2014::StressDivergence;
+        use coil_kernels::viscosity::laplacian_muller2003::VelocityLaplacian;
+        use coil_kernels::viscosity::hourglass_ganzenmuller2015::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
+        use coil_kernels::viscosity::stress_andrade2014::{stress_pass, StressArgs};
         use coil_kernels::view::ViewMut;
         let (nu0, fluid, p) = (0.1, self.fluid, &mut self.particles);
         let n = p.len();

@@ -8,7 +8,7 @@ use coil::model::{LaplacianModel, Model, StressModel};
 use coil::setup::initial_particles;
 use coil::simulation::Simulation;
 use coil_kernels::acceleration::acceleration;
-use coil_kernels::acceleration::StressDivergence;
+use coil_kernels::viscosity::stress_andrade2014::StressDivergence;
 use coil_kernels::cell_grid::Neighbors;
 use coil_kernels::cross_viscosity::{Cross, Newtonian};
 use coil_kernels::velocity_gradient::velocity_gradient;

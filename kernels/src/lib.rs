@@ -7,11 +7,11 @@
 //! Per step: [`cell_grid::hash_pass`], the [`counting_sort`] stages and a gather of every
 //! particle field, the [`fluid_cells`] marks, on the CPU the [`neighbor_list`] pass,
 //! [`density::density_pass`] (Eq. 5, 6),
-//! [`mirrored_wall::mirrored_wall_pass`] (when the scene asks), [`velocity_gradient::stress_pass`]
-//! (Eq. 8, 2, 3; the paper's operator only) or [`shear_viscosity::shear_viscosity_pass`]
-//! (Eq. 8, 2, 3; Morris's operator with the Cross model only) or
-//! [`hourglass_control::velocity_gradient_pass`] (Eq. 8, 2, 3; the paper's operator with
-//! hourglass control),
+//! [`mirrored_wall::mirrored_wall_pass`] (when the scene asks), the viscous operator's pre-pass
+//! ([`viscosity::stress_andrade2014::stress_pass`], Eq. 8, 2, 3, for the paper's operator;
+//! [`viscosity::laplacian_morris1997::shear_viscosity_pass`] for Morris's operator with the
+//! Cross model; [`viscosity::hourglass_ganzenmuller2015::velocity_gradient_pass`] for the
+//! paper's operator with hourglass control),
 //! [`acceleration::acceleration_pass`] (Eq. 7, 9, Müller's or Morris's Laplacian, hourglass
 //! control, gravity),
 //! [`nozzle::nozzle_pass`] (jet scenes only) and
@@ -34,18 +34,17 @@ pub mod density;
 pub mod diagnostics;
 pub mod fluid;
 pub mod fluid_cells;
-pub mod hourglass_control;
 pub mod leapfrog;
 pub mod mirrored_wall;
 pub mod neighbor_list;
 pub mod nozzle;
 pub mod real;
-pub mod shear_viscosity;
 pub mod smoothing;
 pub mod topology;
 pub mod vec3;
 pub mod velocity_gradient;
 pub mod view;
+pub mod viscosity;
 
 #[cfg(any(target_arch = "nvptx64", feature = "host-entries"))]
 pub mod ptx;

@@ -1,12 +1,11 @@
-//! Velocity gradient, rate of deformation, shear rate and stress (Algorithm 1, lines 10-11).
+//! Velocity gradient, rate of deformation and shear rate (Eq. (8), (2)), which every viscous
+//! pre-pass reads (Algorithm 1, line 10).
 
-use crate::cell_grid::{Neighborhood, Neighbors};
-use crate::cross_viscosity::Rheology;
+use crate::cell_grid::Neighbors;
 use crate::fluid::Fluid;
 use crate::real::Real;
-use crate::topology::Open;
 use crate::vec3::{Mat3, SymTensor, Vec3};
-use crate::view::{SymTensorViewMut, Vec3View, View};
+use crate::view::{Vec3View, View};
 
 /// Velocity gradient, Eq. (8): grad v_i = sum_j (m_j / rho_j) (v_j - v_i) ⊗ grad_i W(x_ij)
 /// (1/s), with `m[a][b] = d v_a / d x_b`. Zero, without the neighbor loop, away from fluid,
@@ -46,37 +45,3 @@ pub fn shear_rate<R: Real>(deformation: SymTensor<R>) -> R {
     (deformation.double_contraction() * R::from_f64(0.5)).sqrt()
 }
 
-/// Shear stress tau = rho nu(D) D (Pa), Eq. (2), with nu from `rheology` (Eq. (3)).
-#[inline(always)]
-pub fn stress<R: Real, Rh: Rheology<R>>(deformation: SymTensor<R>, density: R, rheology: &Rh) -> SymTensor<R> {
-    deformation.scaled(density * rheology.viscosity(shear_rate(deformation)))
-}
-
-/// Arguments of the velocity-gradient-and-stress pass.
-#[repr(C)]
-#[derive(Clone, Copy, Debug)]
-pub struct StressArgs<'a, R, Rh, N = Neighborhood<'a, Open>> {
-    pub neighborhood: N,
-    pub fluid: Fluid<R>,
-    pub rheology: Rh,
-    /// Velocity the viscous terms read (m/s): see `leapfrog`.
-    pub velocity: Vec3View<'a, R>,
-    pub density: View<'a, R>,
-    pub stress: SymTensorViewMut<'a, R>,
-}
-
-/// The stress pass for particle `i` (boundary particles included: Eq. (9) reads their stress).
-#[inline(always)]
-pub fn stress_pass<R: Real, Rh: Rheology<R>, N: Neighbors>(i: usize, a: &StressArgs<R, Rh, N>) {
-    let grad = velocity_gradient(i, &a.neighborhood, &a.velocity, &a.density, &a.fluid);
-    let tau = stress(rate_of_deformation(grad), a.density.at(i), &a.rheology);
-    // SAFETY: invocation i owns entry i.
-    unsafe {
-        a.stress.xx.write(i, tau.xx);
-        a.stress.yy.write(i, tau.yy);
-        a.stress.zz.write(i, tau.zz);
-        a.stress.xy.write(i, tau.xy);
-        a.stress.xz.write(i, tau.xz);
-        a.stress.yz.write(i, tau.yz);
-    }
-}

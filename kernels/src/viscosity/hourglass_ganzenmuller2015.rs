@@ -12,7 +12,8 @@
 //! order in the spacing for a smooth one, so the continuum operator stays the paper's; the
 //! alternating mode has no gradient, so it gets the full Laplacian's damping.
 
-use crate::acceleration::{morris_pair_weight, ViscousOperator};
+use super::laplacian_morris1997::morris_pair_weight;
+use super::ViscousOperator;
 use crate::cell_grid::{Neighborhood, Neighbors};
 use crate::cross_viscosity::Rheology;
 use crate::fluid::Fluid;
@@ -55,7 +56,7 @@ pub fn velocity_gradient_pass<R: Real, Rh: Rheology<R>, N: Neighbors>(i: usize, 
 /// Eq. (9), sum_j m_j (tau_i / rho_i^2 + tau_j / rho_j^2) · grad_i W with tau = rho nu D, plus
 /// `coefficient` times Morris's Laplacian of the hourglass residual e_ij (see the module docs),
 /// sum_j m_j (nu_i / rho_j + nu_j / rho_i) / 2 e_ij F(r), whose pair weight is that of
-/// [`MorrisViscosity`](crate::acceleration::MorrisViscosity), [`morris_pair_weight`]: symmetric,
+/// [`MorrisViscosity`](super::laplacian_morris1997::MorrisViscosity), [`morris_pair_weight`]: symmetric,
 /// so with e_ji = -e_ij pair forces cancel.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
