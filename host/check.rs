@@ -198,9 +198,10 @@ impl WithModel for Plan<'_> {
         // Counted by allocating it on the emulated device, whose memory is the host's: the
         // figure `coil run --backend cuda` prints, with no GPU needed.
         #[cfg(feature = "cuda")]
-        let device_memory_bytes = crate::cuda::GpuSimulation::on_gpu(Setup::new(self.scene, self.initial, model), crate::cuda::Gpu::emulated())
-            .ok()
-            .map(|g| g.backend.memory_bytes());
+        let device_memory_bytes =
+            crate::cuda::GpuSimulation::on_gpu(Setup::new(self.scene, self.initial, model), crate::cuda::Gpu::emulated())
+                .ok()
+                .map(|g| g.backend.memory_bytes());
         #[cfg(not(feature = "cuda"))]
         let device_memory_bytes = None;
         RunPlan { inlets, fluid_capacity, stepper, memory_bytes, device_memory_bytes }

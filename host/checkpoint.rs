@@ -14,9 +14,9 @@
 //! bytes before it, so a damaged file is refused rather than misread.
 
 use crate::model::Model;
+use crate::particles::Particles;
 use crate::run::Tally;
 use crate::scene::Scene;
-use crate::particles::Particles;
 use crate::simulation::{Diagnostics, RunState, Setup};
 use crate::time_step::Limit;
 use coil_kernels::Real;

@@ -3,8 +3,8 @@ pub use coil_kernels as kernels;
 pub mod bench;
 pub mod bench_report;
 pub mod check;
-pub mod cpu;
 pub mod checkpoint;
+pub mod cpu;
 #[cfg(feature = "cuda")]
 pub mod cuda;
 pub mod frame;

@@ -5,21 +5,21 @@
 //! physics it uses.
 
 pub use crate::particles::ModelFields;
-use crate::simulation::backend::Passes;
 use crate::scene::{Precision, Scene, Viscosity, ViscosityOperator};
+use crate::simulation::backend::Passes;
 use coil_kernels::acceleration::AccelerationArgs;
-use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
-use coil_kernels::viscosity::stress_andrade2014::StressDivergence;
-use coil_kernels::viscosity::laplacian_muller2003::VelocityLaplacian;
-use coil_kernels::viscosity::ViscousOperator;
 use coil_kernels::cell_grid::{Neighborhood, Neighbors};
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
-use coil_kernels::viscosity::hourglass_ganzenmuller2015::{HourglassControlledStress, VelocityGradientArgs};
-use coil_kernels::viscosity::laplacian_morris1997::ShearViscosityArgs;
 use coil_kernels::topology::{Open, Topology};
-use coil_kernels::viscosity::stress_andrade2014::StressArgs;
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
+use coil_kernels::viscosity::hourglass_ganzenmuller2015::{HourglassControlledStress, VelocityGradientArgs};
+use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
+use coil_kernels::viscosity::laplacian_morris1997::ShearViscosityArgs;
+use coil_kernels::viscosity::laplacian_muller2003::VelocityLaplacian;
+use coil_kernels::viscosity::stress_andrade2014::StressArgs;
+use coil_kernels::viscosity::stress_andrade2014::StressDivergence;
+use coil_kernels::viscosity::ViscousOperator;
 use coil_kernels::Real;
 
 /// A viscosity operator and law, fixed for a run.

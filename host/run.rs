@@ -7,11 +7,11 @@ use crate::model::{with_precision_and_model, Model, WithModel};
 use crate::output::vtu::{encode, series_path, Field, Series};
 use crate::output::write_atomically;
 use crate::parallel::on_worker;
+use crate::particles::HostParticles;
 use crate::preview::{own_range, render, speeds, Coloring, View};
 use crate::run_log::{resolved, Resumed, RunLog};
 use crate::scene::{FrameFormat, Precision, Scene, SceneError};
 use crate::setup::{initial_particles, InitialParticles};
-use crate::particles::HostParticles;
 use crate::simulation::backend::Backend as StepBackend;
 use crate::simulation::{Instability, RunState, Setup, Simulation, StepError};
 use coil_kernels::Real;
@@ -645,7 +645,7 @@ fn drive<R: Real, M: Model<R>, B: StepBackend<R>>(
         tally.max_compression = tally.max_compression.max(run.diagnostics.max_compression);
         tally.max_speed = tally.max_speed.max(run.diagnostics.max_speed);
         let due = match every_steps {
-            Some(k) => run.steps % k == 0,
+            Some(k) => run.steps.is_multiple_of(k),
             None => run.time >= tally.next_frame_time * (1.0 - 1e-9),
         };
         if due {

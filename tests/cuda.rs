@@ -9,33 +9,33 @@
 
 mod common;
 
-use coil::particles::Particles;
-use coil::simulation::backend::Backend as _;
 use coil::cuda::device_array::{vec3_view, vec3_view_mut, DeviceArray};
 use coil::cuda::gpu::{ByValue, PTX};
 use coil::cuda::{Gpu, GpuSimulation};
 use coil::model::{cross_law, HourglassStressModel, LaplacianModel, Model, MorrisModel, ShearThinningMorrisModel, StressModel};
+use coil::particles::Particles;
 use coil::scene::Scene;
 use coil::setup::initial_particles;
+use coil::simulation::backend::Backend as _;
 use coil::simulation::Simulation;
 use coil_kernels::acceleration::AccelerationArgs;
-use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
-use coil_kernels::viscosity::stress_andrade2014::StressDivergence;
-use coil_kernels::viscosity::laplacian_muller2003::VelocityLaplacian;
 use coil_kernels::cell_grid::{HashArgs, Neighborhood};
 use coil_kernels::counting_sort::Counters;
 use coil_kernels::cross_viscosity::{Cross, Newtonian};
 use coil_kernels::density::DensityArgs;
 use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
 use coil_kernels::fluid_cells::{HoldsFluidArgs, NearFluidArgs};
-use coil_kernels::viscosity::hourglass_ganzenmuller2015::{HourglassControlledStress, VelocityGradientArgs};
 use coil_kernels::leapfrog::LeapfrogArgs;
 use coil_kernels::mirrored_wall::MirroredWallArgs;
 use coil_kernels::nozzle::NozzleArgs;
-use coil_kernels::viscosity::laplacian_morris1997::ShearViscosityArgs;
 use coil_kernels::topology::{Open, Periodic, Topology};
-use coil_kernels::viscosity::stress_andrade2014::StressArgs;
 use coil_kernels::view::{View, ViewMut};
+use coil_kernels::viscosity::hourglass_ganzenmuller2015::{HourglassControlledStress, VelocityGradientArgs};
+use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
+use coil_kernels::viscosity::laplacian_morris1997::ShearViscosityArgs;
+use coil_kernels::viscosity::laplacian_muller2003::VelocityLaplacian;
+use coil_kernels::viscosity::stress_andrade2014::StressArgs;
+use coil_kernels::viscosity::stress_andrade2014::StressDivergence;
 use coil_kernels::Real;
 use common::{quiet_run_options, uniform};
 use std::collections::HashMap;
@@ -369,8 +369,7 @@ fn an_unstable_gpu_run_is_stopped_by_the_guard() {
         let scene = dam_break();
         let initial = initial_particles(&scene, "dam_break.toml").expect("valid");
         let model = cross::<f32>(&scene);
-        let mut sim =
-            GpuSimulation::<f32, _>::new_on_gpu(&scene, &initial, model, engine.open()).expect("device state");
+        let mut sim = GpuSimulation::<f32, _>::new_on_gpu(&scene, &initial, model, engine.open()).expect("device state");
         sim.backend.check_every = 1;
         let bound = sim.run.stepper.bound.dt().0;
         let stopped = (0..2000).find_map(|_| sim.step_with(50.0 * bound, coil::time_step::Limit::Fixed).err());
@@ -529,8 +528,8 @@ fn random_stages(engine: Engine, seed: u64) {
     use coil_kernels::acceleration::acceleration_pass;
     use coil_kernels::cell_grid::{hash, CellGrid, Neighborhood};
     use coil_kernels::density::{density_pass, Poly6};
-    use coil_kernels::viscosity::stress_andrade2014::stress_pass;
     use coil_kernels::view::{SymTensorViewMut, Vec3View, Vec3ViewMut, ViewMut};
+    use coil_kernels::viscosity::stress_andrade2014::stress_pass;
     let mut gpu = engine.open();
     let grid = CellGrid { origin: [0.0; 3], inverse_cell_size: [10.0; 3], dims: [8, 6, 5] };
     let (n, cells) = (4000usize, grid.cell_count() as usize);
@@ -802,8 +801,7 @@ fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
 fn held_and_counted<R: Real, M: Model<R>>(scene: &Scene, model: M) -> (usize, usize) {
     let initial = initial_particles(scene, "dam_break.toml").expect("particles");
     let mut on_gpu =
-        GpuSimulation::<R, M>::new_on_gpu(scene, &initial, model, Gpu::emulated_with_memory(usize::MAX))
-            .expect("device state");
+        GpuSimulation::<R, M>::new_on_gpu(scene, &initial, model, Gpu::emulated_with_memory(usize::MAX)).expect("device state");
     let (free, total) = on_gpu.backend.gpu().memory();
     (total - free, on_gpu.backend.memory_bytes())
 }

@@ -72,8 +72,10 @@ fn the_nozzle_tube_pushes_the_jet_at_its_speed_when_the_jet_is_blocked() {
         assert_eq!(v, [0.0, -0.5, 0.0], "particle {i} in the tube");
     }
     // Below the exit the jet has slowed down against the plate.
-    let slowest =
-        (0..p.len()).filter(|&i| !sim.run.fluid.is_boundary(p.id[i])).map(|i| p.velocity[1][i].abs()).fold(f64::INFINITY, f64::min);
+    let slowest = (0..p.len())
+        .filter(|&i| !sim.run.fluid.is_boundary(p.id[i]))
+        .map(|i| p.velocity[1][i].abs())
+        .fold(f64::INFINITY, f64::min);
     assert!(slowest < 0.25, "the plate stops the jet (slowest {slowest} m/s)");
 }
 

@@ -638,9 +638,11 @@ fn sorted_lattice(
 fn lattice_viscous_accelerations(velocity_at: impl Fn([f64; 3]) -> [f64; 3], coefficient: f64) -> (Vec3<f64>, Vec3<f64>) {
     use coil::particles::{mat3_view_mut, vec3_view, ModelFields};
     use coil_kernels::acceleration::acceleration;
-    use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
-    use coil_kernels::viscosity::hourglass_ganzenmuller2015::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
     use coil_kernels::view::ViewMut;
+    use coil_kernels::viscosity::hourglass_ganzenmuller2015::{
+        velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs,
+    };
+    use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
     let nu0 = 0.1;
     let fields = ModelFields { viscosity: true, velocity_gradient: true, ..ModelFields::default() };
     let (mut p, grid, fluid) = sorted_lattice(12, fields, |_| true, velocity_at);
@@ -792,12 +794,14 @@ impl Ball {
     fn viscous_accelerations(&mut self, velocity: &[Vec<f64>; 3]) -> [Vec<Vec3<f64>>; 4] {
         use coil::particles::{mat3_view_mut, stress_view_mut, vec3_view};
         use coil_kernels::acceleration::acceleration;
-        use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
-        use coil_kernels::viscosity::stress_andrade2014::StressDivergence;
-        use coil_kernels::viscosity::laplacian_muller2003::VelocityLaplacian;
-        use coil_kernels::viscosity::hourglass_ganzenmuller2015::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
-        use coil_kernels::viscosity::stress_andrade2014::{stress_pass, StressArgs};
         use coil_kernels::view::ViewMut;
+        use coil_kernels::viscosity::hourglass_ganzenmuller2015::{
+            velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs,
+        };
+        use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
+        use coil_kernels::viscosity::laplacian_muller2003::VelocityLaplacian;
+        use coil_kernels::viscosity::stress_andrade2014::StressDivergence;
+        use coil_kernels::viscosity::stress_andrade2014::{stress_pass, StressArgs};
         let (nu0, fluid, p) = (0.1, self.fluid, &mut self.particles);
         let n = p.len();
         let nb = self.grid.neighborhood(vec3_view(&p.position, n), Open);
@@ -847,10 +851,10 @@ fn rigid_rotation_spin_down_rates() -> [f64; 4] {
 /// back against its motion, a spurious traction of order rho nu omega that spins a small
 /// ball down at a few times nu / R^2 (R = 3.5 spacings) where an exact operator gives zero. The
 /// paper's operator sees only the rate of strain Eq. (8) then (2) makes of it, which the
-/// surface's kernel deficit leaves small but not zero. Measured: 304 and 401 1/s for Müller's
-/// and Morris's, 14.7 1/s for the paper's, 30.3 1/s with hourglass control (whose residual at
-/// the surface particles weighs more under the symmetric pair weight than it did under
-/// nu / rho_j: 14.0 1/s then, and 315 1/s for Morris's); nu / R^2 = 81.6 1/s. It matches the
+/// surface's kernel deficit leaves small but not zero. Measured: 468 and 401 1/s for Müller's
+/// and Morris's (Müller's 304 1/s under its printed pair weight nu0 / rho_j, which the surface
+/// particles' low densities weigh less), 14.7 1/s for the paper's, 30.3 1/s with hourglass
+/// control; nu / R^2 = 81.6 1/s. It matches the
 /// jet runs: the operators that leave rotation nearly free buckle the rope and swing the pile,
 /// the Laplacians do neither (docs/validation.md, jet buckling). The bounds leave a factor of two either
 /// side of the measured figures.

@@ -3,16 +3,16 @@
 
 mod common;
 
-use coil::simulation::backend::Backend as _;
 use coil::model::{LaplacianModel, Model, StressModel};
 use coil::setup::initial_particles;
+use coil::simulation::backend::Backend as _;
 use coil::simulation::Simulation;
 use coil_kernels::acceleration::acceleration;
-use coil_kernels::viscosity::stress_andrade2014::StressDivergence;
 use coil_kernels::cell_grid::Neighbors;
 use coil_kernels::cross_viscosity::{Cross, Newtonian};
 use coil_kernels::velocity_gradient::velocity_gradient;
 use coil_kernels::view::{SymTensorView, View};
+use coil_kernels::viscosity::stress_andrade2014::StressDivergence;
 
 fn simulation<M: Model<f64>>(text: &str, model: M) -> Simulation<f64, M> {
     let scene = common::scene(text);
@@ -231,7 +231,11 @@ fn the_cpu_neighbor_lists_give_the_grids_results_to_the_bit() {
         let mut listed = Simulation::new(&scene, &initial, model);
         let mut grid = Simulation::for_device(&scene, &initial, model);
         let list_bytes = listed.particles().capacity() * 4 * coil_kernels::neighbor_list::NEIGHBOR_SLOTS;
-        assert_eq!(listed.backend.memory_bytes(), grid.backend.memory_bytes() + list_bytes, "{what}: only the CPU run keeps lists");
+        assert_eq!(
+            listed.backend.memory_bytes(),
+            grid.backend.memory_bytes() + list_bytes,
+            "{what}: only the CPU run keeps lists"
+        );
         for _ in 0..steps {
             listed.step().expect("stable");
             grid.step().expect("stable");

@@ -338,5 +338,8 @@ fn a_high_sound_speed_channel_stays_laminar_with_the_spiky_density() {
     let (spiky, error) = wall_normal(DensityKernel::Spiky);
     assert!(spiky < 1e-3 && error < 0.03, "spiky density: wall-normal speed {spiky:.3e}, error {error:.4} of the peak");
     let (poly6, _) = wall_normal(DensityKernel::Poly6);
-    assert!(poly6 > 0.1, "poly6 density: wall-normal speed {poly6:.3e} of the peak; the flutter docs/scene-format.md describes is gone");
+    assert!(
+        poly6 > 0.1,
+        "poly6 density: wall-normal speed {poly6:.3e} of the peak; the flutter docs/scene-format.md describes is gone"
+    );
 }

@@ -1,26 +1,26 @@
 //! The CPU backend: the particles in host memory, each pass a kernel function run over all
 //! particles with rayon.
 
-use crate::parallel::launch;
 use crate::neighbor_grid::NeighborGrid;
+use crate::parallel::launch;
 use crate::particles::{mat3_view_mut, stress_view_mut, vec3_view, vec3_view_mut, view_mut, HostParticles, Particles};
 use crate::simulation::backend::{Backend, ParticleViews, Passes, Readout, Schedule};
 use crate::simulation::Diagnostics;
 use coil_kernels::acceleration::{acceleration_pass, AccelerationArgs};
-use coil_kernels::viscosity::ViscousOperator;
 use coil_kernels::cell_grid::Neighbors;
 use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::density::{density_pass, DensityArgs, DensityKernel};
 use coil_kernels::diagnostics::{range_figures, DiagnosticsArgs};
 use coil_kernels::fluid::Fluid;
-use coil_kernels::viscosity::hourglass_ganzenmuller2015::{velocity_gradient_pass, VelocityGradientArgs};
 use coil_kernels::leapfrog::{leapfrog_pass, LeapfrogArgs};
 use coil_kernels::mirrored_wall::{mirrored_wall_pass, MirroredWallArgs};
 use coil_kernels::nozzle::{nozzle_pass, NozzleArgs};
-use coil_kernels::viscosity::laplacian_morris1997::{shear_viscosity_pass, ShearViscosityArgs};
 use coil_kernels::topology::{Open, Periodic, Topology};
-use coil_kernels::viscosity::stress_andrade2014::{stress_pass, StressArgs};
 use coil_kernels::view::{Vec3View, View};
+use coil_kernels::viscosity::hourglass_ganzenmuller2015::{velocity_gradient_pass, VelocityGradientArgs};
+use coil_kernels::viscosity::laplacian_morris1997::{shear_viscosity_pass, ShearViscosityArgs};
+use coil_kernels::viscosity::stress_andrade2014::{stress_pass, StressArgs};
+use coil_kernels::viscosity::ViscousOperator;
 use coil_kernels::Real;
 use rayon::prelude::*;
 use std::convert::Infallible;
@@ -133,13 +133,8 @@ impl<R: Real> Backend<R> for CpuBackend<R> {
     fn read_diagnostics(&mut self, fluid: Fluid<R>, runaway_speed2: f64) -> Result<Readout, Infallible> {
         let p = &self.host.particles;
         let n = p.len();
-        let args = DiagnosticsArgs {
-            fluid,
-            runaway_speed2,
-            id: p.id_view(),
-            velocity: p.velocity_view(),
-            density: p.density_view(),
-        };
+        let args =
+            DiagnosticsArgs { fluid, runaway_speed2, id: p.id_view(), velocity: p.velocity_view(), density: p.density_view() };
         let figures = (0..n.div_ceil(DIAGNOSTICS_RANGE))
             .into_par_iter()
             .map(|r| range_figures(r, DIAGNOSTICS_RANGE, n, &args))

@@ -15,7 +15,6 @@ use crate::particles::{HostParticles, ModelFields, Particles};
 use crate::simulation::backend::{Backend, ParticleViews, Passes, Readout, Schedule};
 use crate::simulation::{Setup, Simulation, StepError};
 use coil_kernels::acceleration::AccelerationArgs;
-use coil_kernels::viscosity::ViscousOperator;
 use coil_kernels::cell_grid::{HashArgs, Neighborhood};
 use coil_kernels::counting_sort::scan_levels_len;
 use coil_kernels::cross_viscosity::Rheology;
@@ -23,14 +22,15 @@ use coil_kernels::density::{DensityArgs, DensityKernel};
 use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::fluid_cells::{HoldsFluidArgs, NearFluidArgs};
-use coil_kernels::viscosity::hourglass_ganzenmuller2015::VelocityGradientArgs;
 use coil_kernels::leapfrog::LeapfrogArgs;
 use coil_kernels::mirrored_wall::MirroredWallArgs;
 use coil_kernels::nozzle::NozzleArgs;
-use coil_kernels::viscosity::laplacian_morris1997::ShearViscosityArgs;
 use coil_kernels::topology::{Periodic, Topology};
-use coil_kernels::viscosity::stress_andrade2014::StressArgs;
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, View};
+use coil_kernels::viscosity::hourglass_ganzenmuller2015::VelocityGradientArgs;
+use coil_kernels::viscosity::laplacian_morris1997::ShearViscosityArgs;
+use coil_kernels::viscosity::stress_andrade2014::StressArgs;
+use coil_kernels::viscosity::ViscousOperator;
 use coil_kernels::Real;
 
 /// Buckets per scan chunk on the device: more, shorter chunks than on the CPU keep each
@@ -457,7 +457,6 @@ impl<R: Real> CudaBackend<R> {
             self.gpu.launch(near_fluid, cells, &[&ByValue(cells), &ByValue(near)])
         }
     }
-
 }
 
 impl<R: Real> Backend<R> for CudaBackend<R> {

@@ -6,22 +6,22 @@
 
 use super::Diagnostics;
 use crate::particles::{HostParticles, Particles};
-use std::fmt::Display;
 use coil_kernels::acceleration::AccelerationArgs;
-use coil_kernels::viscosity::ViscousOperator;
 use coil_kernels::cell_grid::{Neighborhood, Neighbors};
 use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::density::{DensityArgs, DensityKernel};
 use coil_kernels::fluid::Fluid;
-use coil_kernels::viscosity::hourglass_ganzenmuller2015::VelocityGradientArgs;
 use coil_kernels::leapfrog::LeapfrogArgs;
 use coil_kernels::mirrored_wall::MirroredWallArgs;
 use coil_kernels::nozzle::NozzleArgs;
-use coil_kernels::viscosity::laplacian_morris1997::ShearViscosityArgs;
 use coil_kernels::topology::{Periodic, Topology};
-use coil_kernels::viscosity::stress_andrade2014::StressArgs;
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
+use coil_kernels::viscosity::hourglass_ganzenmuller2015::VelocityGradientArgs;
+use coil_kernels::viscosity::laplacian_morris1997::ShearViscosityArgs;
+use coil_kernels::viscosity::stress_andrade2014::StressArgs;
+use coil_kernels::viscosity::ViscousOperator;
 use coil_kernels::Real;
+use std::fmt::Display;
 
 /// A backend's way of running each pass over its particles, with neighbors visited through `N`
 /// in topology `T`.

@@ -12,9 +12,6 @@
 //! argument and buffer of it, runs and is tested where no GPU is.
 
 use crate::acceleration::{acceleration_pass, AccelerationArgs};
-use crate::viscosity::laplacian_morris1997::MorrisViscosity;
-use crate::viscosity::stress_andrade2014::StressDivergence;
-use crate::viscosity::laplacian_muller2003::VelocityLaplacian;
 use crate::cell_grid::{hash_pass, HashArgs, Neighborhood};
 use crate::counting_sort::{
     chunk_total, count_particle, gather, scan_chunk, scan_chunk_in_place, scan_chunk_offsets, scatter, sort_bucket, sum_chunk,
@@ -24,14 +21,17 @@ use crate::cross_viscosity::{Cross, Newtonian};
 use crate::density::{density_pass, DensityArgs, Poly6, Spiky};
 use crate::diagnostics::{diagnostics_pass, DiagnosticsArgs, StateFigures};
 use crate::fluid_cells::{holds_fluid_pass, near_fluid_pass, HoldsFluidArgs, NearFluidArgs};
-use crate::viscosity::hourglass_ganzenmuller2015::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
 use crate::leapfrog::{leapfrog_pass, LeapfrogArgs};
 use crate::mirrored_wall::{mirrored_wall_pass, MirroredWallArgs};
 use crate::nozzle::{nozzle_pass, NozzleArgs};
-use crate::viscosity::laplacian_morris1997::{shear_viscosity_pass, ShearViscosityArgs};
 use crate::topology::{Open, Periodic};
-use crate::viscosity::stress_andrade2014::{stress_pass, StressArgs};
 use crate::view::{View, ViewMut};
+use crate::viscosity::hourglass_ganzenmuller2015::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
+use crate::viscosity::laplacian_morris1997::MorrisViscosity;
+use crate::viscosity::laplacian_morris1997::{shear_viscosity_pass, ShearViscosityArgs};
+use crate::viscosity::laplacian_muller2003::VelocityLaplacian;
+use crate::viscosity::stress_andrade2014::StressDivergence;
+use crate::viscosity::stress_andrade2014::{stress_pass, StressArgs};
 
 #[cfg(target_arch = "nvptx64")]
 #[panic_handler]

@@ -44,4 +44,3 @@ pub fn rate_of_deformation<R: Real>(velocity_gradient: Mat3<R>) -> SymTensor<R> 
 pub fn shear_rate<R: Real>(deformation: SymTensor<R>) -> R {
     (deformation.double_contraction() * R::from_f64(0.5)).sqrt()
 }
-
