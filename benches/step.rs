@@ -2,10 +2,10 @@
 //! 64K fluid particles, f32 and f64, with the paper's operator (Cross, K = 1) and with the
 //! Newtonian Laplacian operator, h = 2 x spacing.
 
-use coil::model::{cross_law, LaplacianModel, Model, StressModel};
+use coil::scene::setup::initial_particles;
 use coil::scene::Scene;
-use coil::setup::initial_particles;
 use coil::simulation::backend::Backend as _;
+use coil::simulation::model::{cross_law, LaplacianModel, Model, StressModel};
 use coil::simulation::Simulation;
 use coil_kernels::cross_viscosity::{Cross, Newtonian};
 use coil_kernels::Real;

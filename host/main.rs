@@ -1,16 +1,16 @@
 //! The `coil` command line.
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use coil::bench::report::{chart, csv, kernels_csv, markdown};
 use coil::bench::{bench, cuda_available, precision_name, table_row, BenchBackend, BenchOptions};
-use coil::bench_report::{chart, csv, kernels_csv, markdown};
-use coil::check::check;
-use coil::jet_axis::{offsets_in_run, AxisSample, JetAxis};
+use coil::output::preview::{frame_path, render_frame, Coloring, View};
 use coil::output::vtu_read::read_frame;
 use coil::output::write_atomically;
-use coil::preview::{frame_path, render_frame, Coloring, View};
 use coil::run::{resume, run, Backend, ResumeOptions, RunError, RunOptions, Summary};
+use coil::scene::check::check;
+use coil::scene::overrides::Override;
 use coil::scene::{Precision, Scene, ViscousVelocity};
-use coil::scene_override::Override;
+use coil::validation::jet_axis::{offsets_in_run, AxisSample, JetAxis};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -275,7 +275,7 @@ fn load_scene(path: &Path, set: &[String]) -> Result<Scene, String> {
 
 /// Every command's bad input ends here: one `error:` line and exit code 2.
 fn main() -> ExitCode {
-    coil::interrupt::end_on_closed_pipe();
+    coil::run::interrupt::end_on_closed_pipe();
     match command(Cli::parse().command) {
         Ok(code) => code,
         Err(e) => {
@@ -370,13 +370,14 @@ fn command(command: Command) -> Result<ExitCode, String> {
                 preview,
                 overrides: set,
                 overwrite,
-                stop: Some(coil::interrupt::watch()),
+                stop: Some(coil::run::interrupt::watch()),
             };
             Ok(finish_run(run(&parsed, &file, &options), &options.out_dir))
         }
         Command::Resume { dir, set, execution: Execution { backend, threads, quiet, preview } } => {
             set_threads(threads)?;
-            let options = ResumeOptions { backend: backend.backend(), quiet, preview, set, stop: Some(coil::interrupt::watch()) };
+            let options =
+                ResumeOptions { backend: backend.backend(), quiet, preview, set, stop: Some(coil::run::interrupt::watch()) };
             Ok(finish_run(resume(&dir, &options), &dir))
         }
     }

@@ -3,10 +3,10 @@
 
 mod common;
 
+use coil::bench::operation_count::{count_step_operations, counting, Counted};
 use coil::bench::{dam_break, PeakRates, TABLE_I};
-use coil::model::{with_model, Model, WithModel};
-use coil::operation_count::{count_step_operations, counting, Counted};
-use coil::setup::{initial_particles, InitialParticles};
+use coil::scene::setup::{initial_particles, InitialParticles};
+use coil::simulation::model::{with_model, Model, WithModel};
 use coil::simulation::Simulation;
 use coil_kernels::Real;
 use common::coil;

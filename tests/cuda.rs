@@ -12,11 +12,13 @@ mod common;
 use coil::cuda::device_array::{vec3_view, vec3_view_mut, DeviceArray};
 use coil::cuda::gpu::{ByValue, PTX};
 use coil::cuda::{Gpu, GpuSimulation};
-use coil::model::{cross_law, HourglassStressModel, LaplacianModel, Model, MorrisModel, ShearThinningMorrisModel, StressModel};
-use coil::particles::Particles;
+use coil::scene::setup::initial_particles;
 use coil::scene::Scene;
-use coil::setup::initial_particles;
 use coil::simulation::backend::Backend as _;
+use coil::simulation::model::{
+    cross_law, HourglassStressModel, LaplacianModel, Model, MorrisModel, ShearThinningMorrisModel, StressModel,
+};
+use coil::simulation::particles::Particles;
 use coil::simulation::Simulation;
 use coil_kernels::acceleration::AccelerationArgs;
 use coil_kernels::cell_grid::{HashArgs, Neighborhood};
@@ -234,8 +236,8 @@ fn both_with<R: Real, M: Model<R>>(
     let mut on_gpu = GpuSimulation::<R, M>::new_on_gpu(scene, &initial, model, gpu).expect("device state");
     on_gpu.backend.check_every = 1;
     for _ in 0..steps {
-        cpu.step_with(dt, coil::time_step::Limit::Acoustic).expect("stable on the CPU");
-        on_gpu.step_with(dt, coil::time_step::Limit::Acoustic).expect("stable on the device");
+        cpu.step_with(dt, coil::simulation::time_step::Limit::Acoustic).expect("stable on the CPU");
+        on_gpu.step_with(dt, coil::simulation::time_step::Limit::Acoustic).expect("stable on the device");
     }
     on_gpu.sync().expect("download");
     (cpu, on_gpu)
@@ -372,7 +374,7 @@ fn an_unstable_gpu_run_is_stopped_by_the_guard() {
         let mut sim = GpuSimulation::<f32, _>::new_on_gpu(&scene, &initial, model, engine.open()).expect("device state");
         sim.backend.check_every = 1;
         let bound = sim.run.stepper.bound.dt().0;
-        let stopped = (0..2000).find_map(|_| sim.step_with(50.0 * bound, coil::time_step::Limit::Fixed).err());
+        let stopped = (0..2000).find_map(|_| sim.step_with(50.0 * bound, coil::simulation::time_step::Limit::Fixed).err());
         match stopped {
             Some(coil::cuda::GpuStepError::Unstable(i)) => assert!(i.dt_s > i.stability_bound_s),
             other => panic!("{engine:?}: expected the guard to stop the run, got {other:?}"),
@@ -412,8 +414,8 @@ fn a_jet_on_the_gpu_agrees_with_the_cpu() {
 /// for f64, orders above the fused multiply-adds' rounding.
 #[test]
 fn periodic_channels_on_the_gpu_agree_with_the_cpu() {
-    use coil::model::ShearThinningMorrisModel;
     use coil::scene::ViscosityOperator;
+    use coil::simulation::model::ShearThinningMorrisModel;
     use coil::validation::poiseuille::{Channel, CrossLaw};
     let mut channel = Channel::morris(10, ViscosityOperator::Stress);
     channel.cross = Some(CrossLaw { nu_inf_m2_s: 2.5e-7, k_s: 10.0, n: 0.5 });
@@ -488,7 +490,7 @@ fn the_bench_profiles_every_launch_of_a_gpu_step() {
         assert!(m.operations.is_some_and(|o| o.physics > 0.0 && o.candidates > 0.0), "{r}: {:?}", m.operations);
         assert_eq!(m.arithmetic_floor_ms, None, "{r}: the emulated device has no peak rate");
     }
-    let md = coil::bench_report::markdown(&report, &options);
+    let md = coil::bench::report::markdown(&report, &options);
     assert!(md.contains("## GPU kernels at 1K"), "{md}");
 }
 
@@ -832,8 +834,9 @@ fn the_device_memory_a_run_reports_is_all_it_allocates() {
         assert_eq!(held, counted, "{case}: bytes the device holds, and the run counts");
     }
     // `coil check` tells it before a run.
-    let report = coil::check::check(&dam_break(), "dam_break.toml", Some(coil::scene::Precision::F32), std::time::Duration::ZERO)
-        .expect("a valid scene");
+    let report =
+        coil::scene::check::check(&dam_break(), "dam_break.toml", Some(coil::scene::Precision::F32), std::time::Duration::ZERO)
+            .expect("a valid scene");
     assert_eq!(report.device_memory_bytes, Some(dam_break_f32), "coil check's device memory");
 }
 

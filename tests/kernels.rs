@@ -61,7 +61,7 @@ fn viscosity_laplacian_matches_its_closed_form_integral() {
 /// V (f(x_j) - f(0)) weight(r^2), with the layers at y = +s and -s shifted along x by +shift
 /// and -shift (a lattice sheared by half its spacing at shift = s / 2).
 fn lattice_laplacian(s: f64, h: f64, shift: f64, f: impl Fn(f64, f64, f64) -> f64, weight: impl Fn(f64) -> f64) -> f64 {
-    let volume = coil::setup::calibrated_mass(1000.0, s, h, DensityKernel::Poly6) / 1000.0;
+    let volume = coil::scene::setup::calibrated_mass(1000.0, s, h, DensityKernel::Poly6) / 1000.0;
     let n = (h / s).ceil() as i64 + 1;
     let mut sum = 0.0;
     for k in -n..=n {
@@ -81,7 +81,7 @@ fn lattice_laplacian(s: f64, h: f64, shift: f64, f: impl Fn(f64, f64, f64) -> f6
 #[test]
 fn morris_laplacian_keeps_its_calibration_on_a_sheared_lattice() {
     let (s, h) = (0.01, 0.02);
-    let k = coil::setup::calibrated_kernels::<f64>(1000.0, s, h, DensityKernel::Poly6);
+    let k = coil::scene::setup::calibrated_kernels::<f64>(1000.0, s, h, DensityKernel::Poly6);
     let y2 = |_: f64, y: f64, _: f64| y * y;
     let xz = |x: f64, _: f64, z: f64| x * x + z * z;
     for (name, weight) in
@@ -260,8 +260,8 @@ fn a_cell_index_maps_back_to_its_coordinates() {
 
 #[test]
 fn the_open_neighbor_loop_finds_exactly_the_particles_within_h_in_cell_order() {
-    use coil::neighbor_grid::NeighborGrid;
-    use coil::particles::{ModelFields, Particles};
+    use coil::cpu::neighbor_grid::NeighborGrid;
+    use coil::simulation::particles::{ModelFields, Particles};
     let h = 0.1;
     let (min, max) = ([0.0, 0.0, 0.0], [0.6, 0.6, 0.6]);
     let mut state = 11u64;
@@ -312,8 +312,8 @@ fn the_open_neighbor_loop_finds_exactly_the_particles_within_h_in_cell_order() {
 
 #[test]
 fn the_periodic_neighbor_loop_finds_exactly_the_nearest_images_within_h() {
-    use coil::neighbor_grid::NeighborGrid;
-    use coil::particles::{ModelFields, Particles};
+    use coil::cpu::neighbor_grid::NeighborGrid;
+    use coil::simulation::particles::{ModelFields, Particles};
     // Periodic in x (3.4 h: three cells, the fewest allowed) and z (5.1 h), open in y; particles
     // anywhere, many near the seams.
     let h = 0.1;
@@ -359,8 +359,8 @@ fn the_periodic_neighbor_loop_finds_exactly_the_nearest_images_within_h() {
 /// for particles in a cluster with more than the lists hold (visited through the grid).
 #[test]
 fn the_neighbor_lists_visit_the_grids_neighbors_in_its_order_to_the_bit() {
-    use coil::neighbor_grid::NeighborGrid;
-    use coil::particles::{ModelFields, Particles};
+    use coil::cpu::neighbor_grid::NeighborGrid;
+    use coil::simulation::particles::{ModelFields, Particles};
     use coil_kernels::cell_grid::Neighborhood;
     use coil_kernels::neighbor_list::NEIGHBOR_SLOTS;
     fn visits<R: Real, N: Neighbors>(nb: &N, i: usize, h2: R) -> Vec<(usize, [u64; 3], u64)> {
@@ -430,8 +430,8 @@ fn periodic_wrap_moves_a_particle_by_one_period_and_only_along_periodic_axes() {
 /// a linear pressure field, sampled near and far from the wall: the velocity fit is exact.
 #[test]
 fn the_mirrored_wall_fit_reproduces_linear_fields_next_to_a_wall() {
-    use coil::neighbor_grid::NeighborGrid;
-    use coil::particles::{ModelFields, Particles};
+    use coil::cpu::neighbor_grid::NeighborGrid;
+    use coil::simulation::particles::{ModelFields, Particles};
     use coil_kernels::mirrored_wall::fluid_at;
     use coil_kernels::view::ViewMut;
     let (s, h) = (0.01, 0.02);
@@ -472,8 +472,8 @@ fn the_mirrored_wall_fit_reproduces_linear_fields_next_to_a_wall() {
         let pressure = if p.id[i] < boundary_count { 1e6 } else { pressure_at(x) };
         p.density[i] = fluid.rest_density + pressure / fluid.sound_speed2;
     }
-    let (id, nb) = (p.id.clone(), grid.neighborhood(coil::particles::vec3_view(&p.position, n), Open));
-    let velocity = coil::particles::vec3_view_mut(&mut p.velocity, n);
+    let (id, nb) = (p.id.clone(), grid.neighborhood(coil::simulation::particles::vec3_view(&p.position, n), Open));
+    let velocity = coil::simulation::particles::vec3_view_mut(&mut p.velocity, n);
     let density = ViewMut::new(&mut p.density);
     for x in [[0.05, 0.005, 0.05], [0.043, 0.015, 0.061], [0.05, 0.045, 0.05], [0.031, 0.0001, 0.052]] {
         let sample = fluid_at(x, &nb, &View::new(&id), &velocity, &density, &fluid);
@@ -501,15 +501,15 @@ fn the_mirrored_wall_fit_reproduces_linear_fields_next_to_a_wall() {
 
 /// The mirrored-wall fit's velocity (m/s) at each of `points` (m) from the particles `p`, sorted
 /// into a neighbor grid over [-0.05, 0.15]^3 m with `fluid`'s support radius.
-fn fluid_samples(p: &mut coil::particles::Particles<f64>, fluid: &Fluid<f64>, points: &[[f64; 3]]) -> Vec<Vec3<f64>> {
-    use coil::neighbor_grid::NeighborGrid;
+fn fluid_samples(p: &mut coil::simulation::particles::Particles<f64>, fluid: &Fluid<f64>, points: &[[f64; 3]]) -> Vec<Vec3<f64>> {
+    use coil::cpu::neighbor_grid::NeighborGrid;
     use coil_kernels::mirrored_wall::fluid_at;
     use coil_kernels::view::ViewMut;
     let mut grid = NeighborGrid::new([-0.05; 3], [0.15; 3], fluid.kernels.h, [false; 3], p.capacity());
     grid.sort(p);
     let n = p.len();
-    let (id, nb) = (p.id.clone(), grid.neighborhood(coil::particles::vec3_view(&p.position, n), Open));
-    let velocity = coil::particles::vec3_view_mut(&mut p.velocity, n);
+    let (id, nb) = (p.id.clone(), grid.neighborhood(coil::simulation::particles::vec3_view(&p.position, n), Open));
+    let velocity = coil::simulation::particles::vec3_view_mut(&mut p.velocity, n);
     let density = ViewMut::new(&mut p.density);
     points.iter().map(|&x| fluid_at(x, &nb, &View::new(&id), &velocity, &density, fluid).velocity).collect()
 }
@@ -520,7 +520,7 @@ fn fluid_samples(p: &mut coil::particles::Particles<f64>, fluid: &Fluid<f64>, po
 /// was infinite or NaN for a cylinder's rim on a plate).
 #[test]
 fn the_mirrored_wall_fit_falls_back_to_the_mean_of_a_single_neighbor_or_a_line() {
-    use coil::particles::{ModelFields, Particles};
+    use coil::simulation::particles::{ModelFields, Particles};
     let h = 0.025;
     let fluid = Fluid { boundary_count: 0, kernels: SmoothingKernels::new(h), ..fluid::<f64>() };
     let x = [0.0503, 0.0117, 0.0491];
@@ -548,7 +548,7 @@ fn the_mirrored_wall_fit_falls_back_to_the_mean_of_a_single_neighbor_or_a_line()
 /// mean does. The fit without [`MAX_LEVERAGE`] left them by 15 times their range here.
 #[test]
 fn the_mirrored_wall_fit_does_not_extrapolate_across_a_single_layer() {
-    use coil::particles::{ModelFields, Particles};
+    use coil::simulation::particles::{ModelFields, Particles};
     let (s, h) = (0.01, 0.02);
     let fluid = Fluid { boundary_count: 0, kernels: SmoothingKernels::new(h), ..fluid::<f64>() };
     let mut state = 5u64;
@@ -604,14 +604,14 @@ const LATTICE_SPACING: f64 = 0.01;
 /// and kernels calibrated on that lattice as every run's are.
 fn sorted_lattice(
     cells: usize,
-    fields: coil::particles::ModelFields,
+    fields: coil::simulation::particles::ModelFields,
     keep: impl Fn([f64; 3]) -> bool,
     velocity_at: impl Fn([f64; 3]) -> [f64; 3],
-) -> (coil::particles::Particles<f64>, coil::neighbor_grid::NeighborGrid, Fluid<f64>) {
-    use coil::setup::{calibrated_kernels, calibrated_mass};
+) -> (coil::simulation::particles::Particles<f64>, coil::cpu::neighbor_grid::NeighborGrid, Fluid<f64>) {
+    use coil::scene::setup::{calibrated_kernels, calibrated_mass};
     let (rho0, s) = (LATTICE_REST_DENSITY, LATTICE_SPACING);
     let h = 2.0 * s;
-    let mut p = coil::particles::Particles::<f64>::with_capacity(cells * cells * cells, fields);
+    let mut p = coil::simulation::particles::Particles::<f64>::with_capacity(cells * cells * cells, fields);
     for k in 0..cells {
         for j in 0..cells {
             for i in 0..cells {
@@ -622,7 +622,7 @@ fn sorted_lattice(
             }
         }
     }
-    let mut grid = coil::neighbor_grid::NeighborGrid::new([0.0; 3], [cells as f64 * s; 3], h, [false; 3], p.capacity());
+    let mut grid = coil::cpu::neighbor_grid::NeighborGrid::new([0.0; 3], [cells as f64 * s; 3], h, [false; 3], p.capacity());
     grid.sort(&mut p);
     let fluid = Fluid {
         mass: calibrated_mass(rho0, s, h, DensityKernel::Poly6),
@@ -636,7 +636,7 @@ fn sorted_lattice(
 /// [`sorted_lattice`] at rest density whose velocity is `velocity_at`, by the paper's operator
 /// with hourglass control of weight `coefficient`, and by Morris's operator; nu = 0.1 m^2/s.
 fn lattice_viscous_accelerations(velocity_at: impl Fn([f64; 3]) -> [f64; 3], coefficient: f64) -> (Vec3<f64>, Vec3<f64>) {
-    use coil::particles::{mat3_view_mut, vec3_view, ModelFields};
+    use coil::simulation::particles::{mat3_view_mut, vec3_view, ModelFields};
     use coil_kernels::acceleration::acceleration;
     use coil_kernels::view::ViewMut;
     use coil_kernels::viscosity::hourglass_ganzenmuller2015::{
@@ -736,8 +736,8 @@ fn the_scan_by_levels_gives_the_prefix_sums() {
 /// levels): every cell's run holds exactly the particles hashed to it.
 #[test]
 fn a_grid_of_many_scan_chunks_sorts_every_particle_into_its_cell() {
-    use coil::neighbor_grid::NeighborGrid;
-    use coil::particles::{ModelFields, Particles};
+    use coil::cpu::neighbor_grid::NeighborGrid;
+    use coil::simulation::particles::{ModelFields, Particles};
     use coil_kernels::cell_grid::hash;
     let n = 20_000;
     let mut grid = NeighborGrid::new([0.0; 3], [0.7; 3], 0.01, [false; 3], n);
@@ -762,8 +762,8 @@ fn a_grid_of_many_scan_chunks_sorts_every_particle_into_its_cell() {
 /// unused), with densities by Eq. (5), so that its surface particles fall short of rho0, and
 /// no pressure (c = 0) or gravity: the accelerations it gives are viscous only.
 struct Ball {
-    particles: coil::particles::Particles<f64>,
-    grid: coil::neighbor_grid::NeighborGrid,
+    particles: coil::simulation::particles::Particles<f64>,
+    grid: coil::cpu::neighbor_grid::NeighborGrid,
     fluid: Fluid<f64>,
 }
 
@@ -772,7 +772,7 @@ const BALL_CENTRE: f64 = 0.1;
 
 impl Ball {
     fn new() -> Ball {
-        use coil::particles::{vec3_view, ModelFields};
+        use coil::simulation::particles::{vec3_view, ModelFields};
         use coil_kernels::density::{density_pass, DensityArgs, Poly6};
         use coil_kernels::view::ViewMut;
         let fields = ModelFields { stress: true, viscosity: true, velocity_gradient: true };
@@ -792,7 +792,7 @@ impl Ball {
     /// The viscous accelerations (m/s^2) of the particles moving at `velocity` (m/s, by axis),
     /// nu = 0.1 m^2/s: by the paper's operator, with hourglass control 1, Müller's and Morris's.
     fn viscous_accelerations(&mut self, velocity: &[Vec<f64>; 3]) -> [Vec<Vec3<f64>>; 4] {
-        use coil::particles::{mat3_view_mut, stress_view_mut, vec3_view};
+        use coil::simulation::particles::{mat3_view_mut, stress_view_mut, vec3_view};
         use coil_kernels::acceleration::acceleration;
         use coil_kernels::view::ViewMut;
         use coil_kernels::viscosity::hourglass_ganzenmuller2015::{
@@ -880,8 +880,8 @@ fn the_laplacians_brake_a_rigid_rotation_that_the_papers_operator_leaves_nearly_
 /// loop's to the bit.
 #[test]
 fn the_velocity_gradient_skips_only_wall_particles_with_no_fluid_within_h() {
-    use coil::neighbor_grid::NeighborGrid;
-    use coil::particles::{vec3_view, ModelFields, Particles};
+    use coil::cpu::neighbor_grid::NeighborGrid;
+    use coil::simulation::particles::{vec3_view, ModelFields, Particles};
     use coil_kernels::cell_grid::Neighborhood;
     use coil_kernels::velocity_gradient::velocity_gradient;
     let h = 0.1;

@@ -1,8 +1,8 @@
 //! Frames read back as written; previews are pictures of the particles.
 
+use coil::output::preview::{render, render_frame, Coloring, View};
 use coil::output::vtu::{encode, Field};
 use coil::output::vtu_read::parse;
-use coil::preview::{render, render_frame, Coloring, View};
 
 mod common;
 

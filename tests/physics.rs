@@ -3,9 +3,9 @@
 
 mod common;
 
-use coil::model::{LaplacianModel, Model, StressModel};
-use coil::setup::initial_particles;
+use coil::scene::setup::initial_particles;
 use coil::simulation::backend::Backend as _;
+use coil::simulation::model::{LaplacianModel, Model, StressModel};
 use coil::simulation::Simulation;
 use coil_kernels::acceleration::acceleration;
 use coil_kernels::cell_grid::Neighbors;
@@ -92,7 +92,7 @@ fn pressure_and_viscous_forces_conserve_momentum() {
             sim.particles_mut().velocity_half[a][i] = sim.particles_mut().velocity[a][i];
         }
     }
-    sim.step_with(1e-5, coil::time_step::Limit::Fixed).expect("stable");
+    sim.step_with(1e-5, coil::simulation::time_step::Limit::Fixed).expect("stable");
     let mut total = [0.0f64; 3];
     let mut scale = 0.0f64;
     for i in 0..n {
@@ -170,7 +170,7 @@ fn neighbor_search_equals_brute_force() {
         }
     }
     // One step re-sorts the jittered particles; compare on the sorted state.
-    sim.step_with(1e-9, coil::time_step::Limit::Fixed).expect("stable");
+    sim.step_with(1e-9, coil::simulation::time_step::Limit::Fixed).expect("stable");
     let n = sim.particles().len();
     let h2 = sim.run.fluid.kernels.h2;
     let nb = sim.host().neighborhood();
@@ -224,7 +224,7 @@ fn results_do_not_depend_on_the_thread_count_or_the_calling_thread() {
 /// hourglass control's gradient and pair force; Morris's shear-thinning viscosity and pair sum).
 #[test]
 fn the_cpu_neighbor_lists_give_the_grids_results_to_the_bit() {
-    use coil::model::{HourglassStressModel, ShearThinningMorrisModel};
+    use coil::simulation::model::{HourglassStressModel, ShearThinningMorrisModel};
     fn compare<M: Model<f64>>(what: &str, text: &str, model: M, steps: usize) {
         let scene = common::scene(text);
         let initial = initial_particles(&scene, "test.toml").expect("valid");

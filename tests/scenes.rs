@@ -2,9 +2,9 @@
 
 mod common;
 
-use coil::model::StressModel;
+use coil::scene::setup::initial_particles;
 use coil::scene::Scene;
-use coil::setup::initial_particles;
+use coil::simulation::model::StressModel;
 use coil::simulation::Simulation;
 use coil_kernels::cross_viscosity::Newtonian;
 use common::coil;
@@ -25,7 +25,7 @@ fn every_shipped_scene_loads_and_steps() {
     for path in scenes {
         let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
         for v in &scene.variants {
-            let sets: Vec<_> = v.set.iter().map(|s| coil::scene_override::Override::parse(s).expect(s)).collect();
+            let sets: Vec<_> = v.set.iter().map(|s| coil::scene::overrides::Override::parse(s).expect(s)).collect();
             Scene::load_with(&path, &sets).unwrap_or_else(|e| panic!("variant {}: {e}", v.name));
         }
         let initial = initial_particles(&scene, &path.display().to_string()).unwrap_or_else(|e| panic!("{e}"));
@@ -233,8 +233,8 @@ fn a_plate_of_no_extent_or_at_no_height_is_refused() {
 /// grid, and the CPU backend's neighbor list) allow 3.0e6 particles.
 #[test]
 fn a_run_too_large_for_the_machine_is_refused_before_it_allocates() {
-    use coil::particle_limit::ParticleLimit;
-    use coil::setup::initial_particles_within;
+    use coil::scene::particle_limit::ParticleLimit;
+    use coil::scene::setup::initial_particles_within;
     let scene = Scene::parse(&round_jet_text(), "jet.toml").expect("round jet");
     let huge = |capacity: usize| {
         let mut s = scene.clone();
@@ -285,7 +285,7 @@ fn a_mistyped_field_is_named_as_set_spells_it() {
 /// rounding in binary; it is accepted and split into 3 cells. A period a spacing short is not.
 #[test]
 fn a_period_of_three_support_radii_written_in_decimal_is_accepted() {
-    use coil::neighbor_grid::NeighborGrid;
+    use coil::cpu::neighbor_grid::NeighborGrid;
     let text = |length: &str| {
         format!(
             "name = \"channel\"\n[material]\nparticle_spacing_m = 5e-5\n[material.viscosity]\nnu0_m2_s = 1e-6\n\
@@ -307,7 +307,7 @@ fn a_period_of_three_support_radii_written_in_decimal_is_accepted() {
 
 #[test]
 fn set_overrides_any_field_with_the_files_validation() {
-    use coil::scene_override::Override;
+    use coil::scene::overrides::Override;
     let jet = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/round_jet.toml");
     let sets = |given: &[&str]| given.iter().map(|g| Override::parse(g).expect(g)).collect::<Vec<_>>();
     let scene = Scene::load_with(
@@ -344,8 +344,8 @@ fn set_overrides_any_field_with_the_files_validation() {
 
 #[test]
 fn check_reports_counts_the_equation_10_bound_and_a_calibrated_estimate() {
-    use coil::check::check;
-    use coil::time_step::Limit;
+    use coil::scene::check::check;
+    use coil::simulation::time_step::Limit;
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let dam = Scene::load(&dir.join("dam_break.toml")).expect("valid");
     let r = check(&dam, "dam_break.toml", None, std::time::Duration::from_millis(200)).expect("valid");
@@ -360,7 +360,7 @@ fn check_reports_counts_the_equation_10_bound_and_a_calibrated_estimate() {
     // The jet: no fluid at t = 0; the inlet delivers rho0 A U / m particles per second.
     let jet = Scene::load(&dir.join("round_jet.toml")).expect("valid");
     let r = check(&jet, "round_jet.toml", None, std::time::Duration::from_millis(200)).expect("valid");
-    let mass = coil::setup::calibrated_mass(1000.0, 0.004, 0.008, coil::scene::DensityKernel::Poly6);
+    let mass = coil::scene::setup::calibrated_mass(1000.0, 0.004, 0.008, coil::scene::DensityKernel::Poly6);
     let rate = 1000.0 * std::f64::consts::PI * 0.01 * 0.01 * 1.0 / mass;
     assert!(r.initial_fluid == 0 && (r.inlet_rate - rate).abs() < 1e-9 * rate, "{} vs {rate}", r.inlet_rate);
     assert_eq!(r.final_fluid, ((rate * 0.8) as usize).min(4200));
@@ -453,7 +453,7 @@ fn backend_cuda_without_a_device_exits_2_and_auto_falls_back_to_the_cpu() {
 fn wall_particles_mirror_through_the_nearest_point_of_their_wall() {
     let box_m = [0.2, 0.3, 0.16];
     let text = common::box_scene(0.02, box_m, [0.1, 0.1, 0.1], "");
-    let p = coil::setup::initial_particles(&common::scene(&text), "test.toml").expect("valid");
+    let p = coil::scene::setup::initial_particles(&common::scene(&text), "test.toml").expect("valid");
     assert_eq!(p.boundary.len(), p.boundary_mirror.len());
     for (x, m) in p.boundary.iter().zip(&p.boundary_mirror) {
         let surface = [0, 1, 2].map(|a| x[a].clamp(0.0, box_m[a]));
@@ -479,7 +479,7 @@ height_m = 0.0
 min_xz_m = [0.04, 0.04]
 max_xz_m = [0.16, 0.16]
 "#;
-    let p = coil::setup::initial_particles(&common::scene(plate), "test.toml").expect("valid");
+    let p = coil::scene::setup::initial_particles(&common::scene(plate), "test.toml").expect("valid");
     assert!(!p.boundary.is_empty());
     for (x, m) in p.boundary.iter().zip(&p.boundary_mirror) {
         assert!(x[1] < 0.0 && (m[1] + x[1]).abs() < 1e-12, "{x:?} mirrors to {m:?}");
@@ -496,7 +496,7 @@ fn a_fluid_cylinder_fills_its_volume_and_a_bad_one_is_named() {
     assert!(torus.contains(ring));
     let cylinder = "[[fluid_cylinder]]\nbase_centre_m = [0.0, 0.0, 0.0]\nradius_m = 0.2\nheight_m = 0.1\n";
     let scene = Scene::parse(&torus.replacen(ring, cylinder, 1), "cylinder.toml").expect("valid");
-    let fluid = coil::setup::initial_particles(&scene, "cylinder.toml").expect("fills").fluid.len();
+    let fluid = coil::scene::setup::initial_particles(&scene, "cylinder.toml").expect("fills").fluid.len();
     let expected = std::f64::consts::PI * 0.2 * 0.2 * 0.1 / 0.02f64.powi(3);
     assert!((fluid as f64 / expected - 1.0).abs() < 0.05, "{fluid} particles against {expected:.0}");
     let cases = [

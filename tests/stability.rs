@@ -5,7 +5,7 @@ mod common;
 
 use coil::run::{run, RunError, Summary};
 use coil::scene::Scene;
-use coil::time_step::StabilityBound;
+use coil::simulation::time_step::StabilityBound;
 use common::quiet_run_options;
 use std::path::PathBuf;
 
@@ -271,8 +271,8 @@ fn coarse_and_fine_spacing_run() {
 /// forces are finite (zero), and the run goes on.
 #[test]
 fn coincident_particles_get_finite_forces() {
-    use coil::model::StressModel;
-    use coil::setup::initial_particles;
+    use coil::scene::setup::initial_particles;
+    use coil::simulation::model::StressModel;
     use coil::simulation::Simulation;
     use coil_kernels::cross_viscosity::Newtonian;
     let scene = Drop::new("nu0_m2_s = 0.01").scene();

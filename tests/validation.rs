@@ -138,7 +138,7 @@ fn the_taylor_green_vortex_decays_at_the_exact_rate() {
 /// taken from them.
 #[test]
 fn the_jet_axis_offset_reads_where_the_fluid_falls_just_above_the_plate() {
-    use coil::jet_axis::JetAxis;
+    use coil::validation::jet_axis::JetAxis;
     let d = 0.02;
     let (x0, y0, z0) = (0.013, -0.007, -0.021);
     let axis = JetAxis { nozzle_xz_m: [x0, z0], plate_y_m: y0, diameter_m: d };
@@ -168,8 +168,8 @@ fn the_jet_axis_offset_reads_where_the_fluid_falls_just_above_the_plate() {
 /// a jet without one axis is refused, naming the field.
 #[test]
 fn the_jet_axis_is_taken_from_the_nozzle_and_the_surface_below_it() {
-    use coil::jet_axis::JetAxis;
     use coil::scene::{Boundary, Nozzle, NozzleMotion, Scene};
+    use coil::validation::jet_axis::JetAxis;
     let mut jet = Scene::load_with(std::path::Path::new("scenes/newtonian_jet.toml"), &[]).expect("shipped scene");
     jet.inlets[0].position_m = [0.013, 0.1, -0.021];
     jet.boundaries = vec![

@@ -1,10 +1,15 @@
 //! The CPU backend: the particles in host memory, each pass a kernel function run over all
 //! particles with rayon.
 
-use crate::neighbor_grid::NeighborGrid;
-use crate::parallel::launch;
-use crate::particles::{mat3_view_mut, stress_view_mut, vec3_view, vec3_view_mut, view_mut, HostParticles, Particles};
+pub mod neighbor_grid;
+pub mod parallel;
+
+use crate::cpu::neighbor_grid::NeighborGrid;
+use crate::cpu::parallel::launch;
 use crate::simulation::backend::{Backend, ParticleViews, Passes, Readout, Schedule};
+use crate::simulation::particles::{
+    mat3_view_mut, stress_view_mut, vec3_view, vec3_view_mut, view_mut, HostParticles, Particles,
+};
 use crate::simulation::Diagnostics;
 use coil_kernels::acceleration::{acceleration_pass, AccelerationArgs};
 use coil_kernels::cell_grid::Neighbors;

@@ -10,9 +10,9 @@
 use super::device_array::{vec3_view, vec3_view_mut, vec3_zeros, DeviceArray, DeviceVec3};
 use super::gpu::{ByValue, CudaError, Gpu};
 use super::scan::scan_chunk_totals;
-use crate::model::Model;
-use crate::particles::{HostParticles, ModelFields, Particles};
 use crate::simulation::backend::{Backend, ParticleViews, Passes, Readout, Schedule};
+use crate::simulation::model::Model;
+use crate::simulation::particles::{HostParticles, ModelFields, Particles};
 use crate::simulation::{Setup, Simulation, StepError};
 use coil_kernels::acceleration::AccelerationArgs;
 use coil_kernels::cell_grid::{HashArgs, Neighborhood};
@@ -258,7 +258,7 @@ impl<R: Real, M: Model<R>> Simulation<R, M, CudaBackend<R>> {
     /// A fresh run of `scene` with the particles `initial` on `gpu`, sorted and with its density.
     pub fn new_on_gpu(
         scene: &crate::scene::Scene,
-        initial: &crate::setup::InitialParticles,
+        initial: &crate::scene::setup::InitialParticles,
         model: M,
         gpu: Gpu,
     ) -> Result<Self, CudaError> {

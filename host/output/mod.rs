@@ -1,5 +1,10 @@
 //! Frames: one VTK XML `.vtu` per frame plus a `.pvd` series that ParaView opens.
 
+pub mod frame;
+pub mod image;
+pub mod plot;
+pub mod preview;
+
 pub mod points;
 pub mod vtu;
 pub mod vtu_read;
@@ -23,7 +28,9 @@ pub fn earlier_run_files(dir: &Path) -> io::Result<Vec<PathBuf>> {
             number.len() == 6 && number.bytes().all(|b| b.is_ascii_digit()) && ["vtu", "ply", "xyz", "png"].contains(&ext)
         });
         if path.is_file()
-            && (frame || ["run.json", "boundary.vtu", crate::checkpoint::FILE_NAME].contains(&name) || name.ends_with(".pvd"))
+            && (frame
+                || ["run.json", "boundary.vtu", crate::run::checkpoint::FILE_NAME].contains(&name)
+                || name.ends_with(".pvd"))
         {
             files.push(path);
         }

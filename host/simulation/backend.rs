@@ -5,7 +5,7 @@
 //! every backend, over this interface.
 
 use super::Diagnostics;
-use crate::particles::{HostParticles, Particles};
+use crate::simulation::particles::{HostParticles, Particles};
 use coil_kernels::acceleration::AccelerationArgs;
 use coil_kernels::cell_grid::{Neighborhood, Neighbors};
 use coil_kernels::cross_viscosity::Rheology;

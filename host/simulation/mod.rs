@@ -2,17 +2,21 @@
 //! through Algorithm 1 by one schedule that every backend runs.
 
 pub mod backend;
+pub mod inlet;
+pub mod model;
+pub mod particles;
 pub mod run_state;
+pub mod time_step;
 
+use crate::cpu::neighbor_grid::NeighborGrid;
+use crate::cpu::parallel::on_worker;
 use crate::cpu::CpuBackend;
-use crate::inlet::Inlet;
-use crate::model::{Model, ParticleState};
-use crate::neighbor_grid::NeighborGrid;
-use crate::parallel::on_worker;
-use crate::particles::{HostParticles, Particles};
+use crate::scene::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, InitialParticles};
 use crate::scene::{DensityKernel, Scene, ViscousVelocity, Walls};
-use crate::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, InitialParticles};
-use crate::time_step::{Limit, StabilityBound, TimeStepper};
+use crate::simulation::inlet::Inlet;
+use crate::simulation::model::{Model, ParticleState};
+use crate::simulation::particles::{HostParticles, Particles};
+use crate::simulation::time_step::{Limit, StabilityBound, TimeStepper};
 use backend::{Backend, ParticleViews, Passes, Schedule};
 use coil_kernels::cell_grid::Neighbors;
 use coil_kernels::density::{DensityArgs, Poly6, Spiky};

@@ -2,11 +2,11 @@
 //! variant, the clock and time step, the inlets, the particle counts and the guard.
 
 use super::{Diagnostics, Instability};
-use crate::inlet::Inlet;
-use crate::model::Model;
-use crate::particles::Particles;
 use crate::scene::{DensityKernel, ViscousVelocity};
-use crate::time_step::{Limit, TimeStepper};
+use crate::simulation::inlet::Inlet;
+use crate::simulation::model::Model;
+use crate::simulation::particles::Particles;
+use crate::simulation::time_step::{Limit, TimeStepper};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::nozzle::NozzleTube;
 use coil_kernels::Real;

@@ -153,7 +153,7 @@ pub struct Spreading {
 pub fn simulate(release: &Release) -> Result<Spreading, String> {
     // The particles do not depend on the end time, which depends on their volume.
     let probe = release.scene(1.0);
-    let initial = crate::setup::initial_particles(&probe, &probe.name).map_err(|e| e.to_string())?;
+    let initial = crate::scene::setup::initial_particles(&probe, &probe.name).map_err(|e| e.to_string())?;
     let volume_m3 = initial.fluid.len() as f64 * release.spacing().powi(3);
     let end = release.huppert_time(volume_m3, release.final_spread * release.radius_m);
     let samples = 60;

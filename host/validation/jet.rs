@@ -4,8 +4,8 @@
 //! a few diameters it stays straight.
 
 use super::snapshot::snapshots;
-use crate::jet_axis::JetAxis;
 use crate::scene::{Scene, ViscosityOperator};
+use crate::validation::jet_axis::JetAxis;
 
 /// The shipped Newtonian jet.
 const NEWTONIAN_JET: &str = include_str!("../../scenes/newtonian_jet.toml");

@@ -3,13 +3,14 @@
 pub mod huppert;
 pub mod hydrostatic;
 pub mod jet;
+pub mod jet_axis;
 pub mod poiseuille;
 pub mod snapshot;
 pub mod taylor_green;
 pub mod torus;
 pub mod tradeoff;
 
-use crate::plot::{Axis, Chart, Line, Series, PALETTE};
+use crate::output::plot::{Axis, Chart, Line, Series, PALETTE};
 use crate::scene::{PressureGradient, ViscosityOperator};
 use hydrostatic::Tank;
 use poiseuille::{cross_steady_velocity, relative_max_error, simulate, startup_velocity, Channel, CrossLaw};

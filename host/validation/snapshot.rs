@@ -1,9 +1,9 @@
 //! Runs a validation scene on the CPU and samples its fluid at given times, in f64 whatever the
 //! run's precision, so each case compares plain numbers with its reference.
 
-use crate::model::{with_precision_and_model, Model, WithModel};
+use crate::scene::setup::{initial_particles, InitialParticles};
 use crate::scene::Scene;
-use crate::setup::{initial_particles, InitialParticles};
+use crate::simulation::model::{with_precision_and_model, Model, WithModel};
 use crate::simulation::Simulation;
 use coil_kernels::density::pressure;
 use coil_kernels::{Real, Vec3};

@@ -4,8 +4,8 @@
 
 use super::scene_word;
 use super::snapshot::{snapshots_from, Snapshot};
+use crate::scene::setup::initial_particles;
 use crate::scene::{Scene, ViscosityOperator};
-use crate::setup::initial_particles;
 use std::f64::consts::PI;
 
 /// The vortex at `across` particles over the period L, Re = U L / nu = 1.

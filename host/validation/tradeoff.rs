@@ -6,7 +6,7 @@
 
 use super::poiseuille::{Channel, CrossLaw};
 use super::{cross_poiseuille_in, operator_label, startup_poiseuille_in, HOURGLASS_CONTROL};
-use crate::plot::{Axis, Chart, Line, Series, PALETTE};
+use crate::output::plot::{Axis, Chart, Line, Series, PALETTE};
 use crate::scene::{DensityKernel, Precision, ViscosityOperator, ViscousVelocity, Walls};
 use crate::statistics::Sorted;
 use std::time::Instant;

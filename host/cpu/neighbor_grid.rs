@@ -2,8 +2,8 @@
 //! particle field (Algorithm 1, line 3), and the CPU backend's neighbor lists. Also drops
 //! particles that left the domain box.
 
-use crate::parallel::launch;
-use crate::particles::{view_mut, Particles};
+use crate::cpu::parallel::launch;
+use crate::simulation::particles::{view_mut, Particles};
 use coil_kernels::cell_grid::{hash_pass, CellGrid, HashArgs, Neighborhood};
 use coil_kernels::counting_sort::{
     chunk_total, count_particle, gather, scan_by_levels, scan_chunk, scan_chunk_in_place, scan_chunk_offsets, scan_levels_len,

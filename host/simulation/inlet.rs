@@ -6,7 +6,7 @@ use crate::scene::{self, Nozzle, NozzleMotion};
 use coil_kernels::nozzle::NozzleTube;
 use coil_kernels::Real;
 
-use crate::particles::Particles;
+use crate::simulation::particles::Particles;
 
 /// A nozzle during a run.
 #[derive(Debug, Clone)]

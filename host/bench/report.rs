@@ -2,7 +2,7 @@
 //! measurement and of the GPU's kernels, and a PNG plot of time per step against particles.
 
 use crate::bench::{precision_name, BenchBackend, BenchOptions, BenchReport, Measurement, TABLE_I};
-use crate::plot::{Axis, Chart, Line, Series, PALETTE};
+use crate::output::plot::{Axis, Chart, Line, Series, PALETTE};
 use crate::scene::Precision;
 use std::fmt::Write;
 

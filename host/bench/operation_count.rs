@@ -3,9 +3,9 @@
 //! exp2 and log2 it does, on the CPU backend, which runs the very kernels the GPU runs. With a
 //! device's peak rate this gives the step's arithmetic floor (`coil bench`).
 
-use crate::model::{with_model, Model, WithModel};
+use crate::scene::setup::InitialParticles;
 use crate::scene::Scene;
-use crate::setup::InitialParticles;
+use crate::simulation::model::{with_model, Model, WithModel};
 use crate::simulation::Simulation;
 use coil_kernels::real::Real;
 use std::cell::Cell;

@@ -4,9 +4,9 @@
 //! particle. Each is a type, so the CPU loops and the GPU kernels of a run contain only the
 //! physics it uses.
 
-pub use crate::particles::ModelFields;
 use crate::scene::{Precision, Scene, Viscosity, ViscosityOperator};
 use crate::simulation::backend::Passes;
+pub use crate::simulation::particles::ModelFields;
 use coil_kernels::acceleration::AccelerationArgs;
 use coil_kernels::cell_grid::{Neighborhood, Neighbors};
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};

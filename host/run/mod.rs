@@ -1,19 +1,23 @@
 //! `coil run`: a scene from t = 0 to its end time, on the CPU or a CUDA device, writing frames
 //! as it goes.
 
-use crate::checkpoint::{self, Checkpoint};
-use crate::frame::Frame;
-use crate::model::{with_precision_and_model, Model, WithModel};
+pub mod checkpoint;
+pub mod interrupt;
+pub mod run_log;
+
+use crate::cpu::parallel::on_worker;
+use crate::output::frame::Frame;
+use crate::output::preview::{own_range, render, speeds, Coloring, View};
 use crate::output::vtu::{encode, series_path, Field, Series};
 use crate::output::write_atomically;
-use crate::parallel::on_worker;
-use crate::particles::HostParticles;
-use crate::preview::{own_range, render, speeds, Coloring, View};
-use crate::run_log::{resolved, Resumed, RunLog};
+use crate::run::run_log::{resolved, Resumed, RunLog};
+use crate::scene::setup::{initial_particles, InitialParticles};
 use crate::scene::{FrameFormat, Precision, Scene, SceneError};
-use crate::setup::{initial_particles, InitialParticles};
 use crate::simulation::backend::Backend as StepBackend;
+use crate::simulation::model::{with_precision_and_model, Model, WithModel};
+use crate::simulation::particles::HostParticles;
 use crate::simulation::{Instability, RunState, Setup, Simulation, StepError};
+use checkpoint::Checkpoint;
 use coil_kernels::Real;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt;
@@ -294,7 +298,7 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
                 ),
             ));
         }
-        overrides.push(crate::scene_override::Override::parse(given).map_err(RunError::Scene)?);
+        overrides.push(crate::scene::overrides::Override::parse(given).map_err(RunError::Scene)?);
     }
     let scene = Scene::load_with(&log_path, &overrides).map_err(RunError::Scene)?;
     let checkpoint_path = dir.join(checkpoint::FILE_NAME);

@@ -5,13 +5,16 @@
 //! GPU steps are the intervals between CUDA events recorded on the stream between steps, with
 //! nothing waiting in between, so they are what a long run achieves per step.
 
-use crate::model::{with_precision_and_model, Model, ModelFields, WithModel};
-use crate::operation_count::{count_step_operations, StepOperations};
+pub mod operation_count;
+pub mod report;
+
+use crate::bench::operation_count::{count_step_operations, StepOperations};
 use crate::run::Device;
+use crate::scene::overrides::{apply, Override};
+use crate::scene::setup::{initial_particles, InitialParticles};
 use crate::scene::{Precision, Scene};
-use crate::scene_override::{apply, Override};
-use crate::setup::{initial_particles, InitialParticles};
 use crate::simulation::backend::Backend;
+use crate::simulation::model::{with_precision_and_model, Model, ModelFields, WithModel};
 use crate::simulation::{RunState, Setup, Simulation, StepError};
 use crate::statistics::Sorted;
 use coil_kernels::Real;
@@ -19,7 +22,7 @@ use std::time::Instant;
 
 /// The dam break of Table I as shipped (K = 1 s, n = 1, nu0 = 0.05, nu_inf = 0.005 m^2/s,
 /// h = 2 x spacing), embedded so the benchmark is the same wherever it runs.
-const DAM_BREAK: &str = include_str!("../scenes/dam_break.toml");
+const DAM_BREAK: &str = include_str!("../../scenes/dam_break.toml");
 const DAM_BREAK_FILE: &str = "scenes/dam_break.toml (embedded)";
 /// Edge of the dam break's fluid cube (m).
 const CUBE_EDGE_M: f64 = 0.4;

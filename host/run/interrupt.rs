@@ -4,26 +4,26 @@
 //! (`coil scenes | head`) ends the process quietly, as it does any Unix filter.
 
 use std::sync::atomic::AtomicBool;
-#[cfg(unix)]
-use std::sync::atomic::Ordering;
 
 static REQUESTED: AtomicBool = AtomicBool::new(false);
 
 /// Turns SIGINT and SIGTERM into a request to stop (on Unix; elsewhere they end the process as
-/// before): the flag returned, for `RunOptions::stop`.
+/// before): the flag returned, for `RunOptions::stop`. A signal that finds the flag already
+/// set takes its default action, ending the process.
 pub fn watch() -> &'static AtomicBool {
     #[cfg(unix)]
     {
-        extern "C" fn on_signal(signal: libc::c_int) {
-            REQUESTED.store(true, Ordering::Relaxed);
-            // SAFETY: signal() is async-signal-safe; restoring the default makes a second
-            // signal end the process.
-            unsafe { libc::signal(signal, libc::SIG_DFL) };
-        }
-        for signal in [libc::SIGINT, libc::SIGTERM] {
-            // SAFETY: the handler only stores to an atomic and calls signal().
-            unsafe { libc::signal(signal, on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t) };
-        }
+        static INSTALLED: std::sync::Once = std::sync::Once::new();
+        INSTALLED.call_once(|| {
+            for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+                // In this order: the second signal sees the flag the first one set.
+                let installed = signal_hook::flag::register_conditional_default(signal, &REQUESTED)
+                    .and_then(|_| signal_hook::flag::register(signal, &REQUESTED));
+                if let Err(e) = installed {
+                    eprintln!("warning: Ctrl-C will end the run without a checkpoint ({e})");
+                }
+            }
+        });
     }
     &REQUESTED
 }

@@ -2,7 +2,13 @@
 //! (`deny_unknown_fields`), validated once at load, then turned into plain `Copy` parameter
 //! structs for the kernels.
 
-use crate::scene_override::{self, Override};
+pub mod check;
+pub mod overrides;
+pub mod particle_limit;
+pub mod setup;
+pub mod toml_field;
+
+use overrides::Override;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::Path;
@@ -508,7 +514,7 @@ impl Scene {
         if overrides.is_empty() {
             return Self::parse(&text, &file);
         }
-        Self::parse(&scene_override::apply(&text, &file, overrides)?, &format!("{file} with --set")).map_err(|mut e| {
+        Self::parse(&overrides::apply(&text, &file, overrides)?, &format!("{file} with --set")).map_err(|mut e| {
             // Line numbers would point into the rewritten text, not the user's file.
             if let Some(at) = e.reason.find(" (at line ") {
                 e.reason.truncate(at);
@@ -521,7 +527,7 @@ impl Scene {
     pub fn parse(text: &str, file: &str) -> Result<Scene, SceneError> {
         let scene: Scene = toml::from_str(text).map_err(|e| SceneError {
             file: file.into(),
-            field: e.span().and_then(|s| crate::toml_field::field_at(text, s.start)).unwrap_or_else(|| "(syntax)".into()),
+            field: e.span().and_then(|s| crate::scene::toml_field::field_at(text, s.start)).unwrap_or_else(|| "(syntax)".into()),
             reason: e.message().to_string()
                 + &suggestion(e.message())
                 + &e.span().map(|s| format!(" (at line {})", 1 + text[..s.start].matches('\n').count())).unwrap_or_default(),
@@ -611,7 +617,7 @@ impl Scene {
         }
         for a in (0..3).filter(|&a| d.periodic[a]) {
             let length = d.max_m[a] - d.min_m[a];
-            if length * (1.0 + crate::neighbor_grid::PERIODIC_ROUNDING) < 3.0 * self.support_radius() {
+            if length * (1.0 + crate::cpu::neighbor_grid::PERIODIC_ROUNDING) < 3.0 * self.support_radius() {
                 return err(
                     "domain.periodic",
                     format!(
@@ -649,7 +655,7 @@ impl Scene {
         }
         if let Some(dt) = ts.fixed_s {
             positive("simulation.time_step.fixed_s", dt)?;
-            let bound = crate::time_step::StabilityBound::new(self.support_radius(), m.sound_speed_m_s, v.nu0_m2_s);
+            let bound = crate::simulation::time_step::StabilityBound::new(self.support_radius(), m.sound_speed_m_s, v.nu0_m2_s);
             let (limit_dt, limit) = bound.dt();
             if dt > limit_dt && !ts.allow_above_stability_bound {
                 return err(

@@ -177,7 +177,7 @@ pub fn mat3_view_mut<R: Copy>(m: &mut [[Vec<R>; 3]; 3], n: usize) -> Mat3ViewMut
 /// backend's copy of its particles for output.
 pub struct HostParticles<R> {
     pub particles: Particles<R>,
-    pub grid: crate::neighbor_grid::NeighborGrid,
+    pub grid: crate::cpu::neighbor_grid::NeighborGrid,
 }
 
 impl<R: Real> HostParticles<R> {

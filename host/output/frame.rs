@@ -1,9 +1,9 @@
 //! Per-particle output fields of the fluid, gathered from a run into reusable buffers.
 
-use crate::model::Model;
 use crate::output::points::{encode_ply, encode_xyz};
 use crate::output::vtu::{encode, Field};
-use crate::particles::{vec3_view, HostParticles};
+use crate::simulation::model::Model;
+use crate::simulation::particles::{vec3_view, HostParticles};
 use crate::simulation::RunState;
 use coil_kernels::density::pressure;
 use coil_kernels::velocity_gradient::{rate_of_deformation, shear_rate, velocity_gradient};

@@ -13,12 +13,12 @@
 //! fingerprint, the fields in the order `write` gives them, and an FNV-1a checksum of all the
 //! bytes before it, so a damaged file is refused rather than misread.
 
-use crate::model::Model;
-use crate::particles::Particles;
 use crate::run::Tally;
 use crate::scene::Scene;
+use crate::simulation::model::Model;
+use crate::simulation::particles::Particles;
+use crate::simulation::time_step::Limit;
 use crate::simulation::{Diagnostics, RunState, Setup};
-use crate::time_step::Limit;
 use coil_kernels::Real;
 use std::path::Path;
 
@@ -41,7 +41,7 @@ pub const RESUMABLE: [&str; 3] = ["simulation.end_time_s", "simulation.time_step
 /// Identifies the physics of `scene` (the resolved scene `run.json` logs, precision included):
 /// a checkpoint resumes only the scene it was taken from, up to the [`RESUMABLE`] fields.
 pub fn fingerprint(scene: &Scene) -> u64 {
-    let mut s = crate::run_log::resolved(scene);
+    let mut s = crate::run::run_log::resolved(scene);
     s.simulation.end_time_s = 0.0;
     s.simulation.time_step = Default::default();
     s.output = Default::default();

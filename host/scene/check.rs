@@ -1,15 +1,15 @@
 //! `coil check`: what a scene will cost before it runs. Counts, h, the Eq. (10) bound and its
 //! limiting term, memory, and a wall-time estimate from a short calibration run on this machine.
 
-use crate::inlet::Inlet;
-use crate::model::{with_precision_and_model, Model, WithModel};
+use crate::scene::setup::{fastest_start_speed, initial_particles, InitialParticles};
 use crate::scene::{Boundary, Domain, FluidBlock, Precision, Scene, SceneError};
-use crate::setup::{fastest_start_speed, initial_particles, InitialParticles};
 use crate::simulation::backend::Backend as _;
+use crate::simulation::inlet::Inlet;
+use crate::simulation::model::{with_precision_and_model, Model, WithModel};
+use crate::simulation::time_step::{Limit, StabilityBound, TimeStepper};
 #[cfg(feature = "cuda")]
 use crate::simulation::Setup;
 use crate::simulation::Simulation;
-use crate::time_step::{Limit, StabilityBound, TimeStepper};
 use coil_kernels::Real;
 use std::fmt;
 use std::time::{Duration, Instant};

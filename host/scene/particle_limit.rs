@@ -3,9 +3,9 @@
 //! oversized scene (a misplaced zero in `max_fluid_particles`, a spacing ten times too fine)
 //! is refused with its numbers instead of aborting in the allocator.
 
-use crate::model::{with_precision_and_model, Model, WithModel};
-use crate::particles::Particles;
 use crate::scene::Scene;
+use crate::simulation::model::{with_precision_and_model, Model, WithModel};
+use crate::simulation::particles::Particles;
 use coil_kernels::neighbor_list::NEIGHBOR_SLOTS;
 use coil_kernels::Real;
 

@@ -1,7 +1,7 @@
 //! Line and scatter charts as PNG, for the figures of `coil bench`, `coil validate` and
 //! `coil tradeoff`: linear or logarithmic axes, ticks, a title and a legend.
 
-use crate::image::{char_width, text, text_vertical, Image, INK};
+use crate::output::image::{char_width, text, text_vertical, Image, INK};
 
 /// Distinct colours for series, in order of use.
 pub const PALETTE: [[u8; 3]; 8] = [

@@ -1,8 +1,8 @@
 //! `coil preview`: particles rendered orthographically to a PNG, coloured like the paper's
 //! figures (viscosity from nu_inf to nu0) or by speed, with a colour bar.
 
-use crate::image::text;
-pub use crate::image::Image;
+use crate::output::image::text;
+pub use crate::output::image::Image;
 use std::path::Path;
 
 /// Pixels right of the panels for the colour bar and its numbers.
