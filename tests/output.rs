@@ -1,7 +1,7 @@
 //! Frames read back as written; previews are pictures of the particles.
 
 use coil::output::preview::{render, render_frame, Coloring, View};
-use coil::output::vtu::{encode, Field};
+use coil::output::vtu::{encode, Field, VtuEncoding};
 use coil::output::vtu_read::parse;
 
 mod common;
@@ -29,12 +29,13 @@ fn cloud(n: usize) -> Cloud {
     (position.collect(), velocity.collect(), viscosity.collect(), (0..n as u32).map(|k| 7 * k + 3).collect())
 }
 
-/// The cloud as a `.vtu` file's bytes.
-fn encoded(position: &[[f64; 3]], velocity: &[[f32; 3]], viscosity: &[f32], id: &[u32]) -> Vec<u8> {
+/// The cloud as a `.vtu` file's bytes, in `encoding`.
+fn encoded(position: &[[f64; 3]], velocity: &[[f32; 3]], viscosity: &[f32], id: &[u32], encoding: VtuEncoding) -> Vec<u8> {
     let mut bytes = Vec::new();
     encode(
         position,
         &[Field::Vector("velocity", velocity), Field::Scalar("viscosity", viscosity), Field::Id("id", id)],
+        encoding,
         &mut bytes,
     );
     bytes
@@ -43,15 +44,17 @@ fn encoded(position: &[[f64; 3]], velocity: &[[f32; 3]], viscosity: &[f32], id: 
 #[test]
 fn a_frame_written_and_read_back_gives_the_same_particles() {
     let (position, velocity, viscosity, id) = cloud(1000);
-    let bytes = encoded(&position, &velocity, &viscosity, &id);
-    let frame = parse(&bytes).expect("own format");
-    // Bit for bit: positions are written as f64, the fields as the f32 they are.
-    assert_eq!(frame.position, position);
-    assert_eq!(frame.vectors["velocity"], velocity);
-    assert_eq!(frame.scalars["viscosity"], viscosity);
-    assert_eq!(frame.id, id);
-    let torn = &bytes[..bytes.len() / 2];
-    assert!(parse(torn).is_err(), "a torn file is refused, not misread");
+    for encoding in [VtuEncoding::Raw, VtuEncoding::Base64] {
+        let bytes = encoded(&position, &velocity, &viscosity, &id, encoding);
+        let frame = parse(&bytes).expect("own format");
+        // Bit for bit: positions are written as f64, the fields as the f32 they are.
+        assert_eq!(frame.position, position, "{encoding:?}");
+        assert_eq!(frame.vectors["velocity"], velocity, "{encoding:?}");
+        assert_eq!(frame.scalars["viscosity"], viscosity, "{encoding:?}");
+        assert_eq!(frame.id, id, "{encoding:?}");
+        let torn = &bytes[..bytes.len() / 2];
+        assert!(parse(torn).is_err(), "{encoding:?}: a torn file is refused, not misread");
+    }
 }
 
 #[test]
@@ -85,7 +88,7 @@ fn preview_has_the_expected_size_and_shows_the_particles() {
     assert_eq!(&buf[..info.buffer_size()], &image.pixels[..]);
 
     // From a frame: coloured by speed as well.
-    let frame = parse(&encoded(&position, &velocity, &viscosity, &id)).expect("own format");
+    let frame = parse(&encoded(&position, &velocity, &viscosity, &id, VtuEncoding::Raw)).expect("own format");
     let by_speed = render_frame(&frame, View::Side, Coloring::Speed, None, size).expect("has velocity");
     assert_eq!((by_speed.width, by_speed.height), (size + 110, size));
     assert_ne!(by_speed.pixels, render_frame(&frame, View::Side, Coloring::Viscosity, None, size).expect("has viscosity").pixels);
@@ -170,6 +173,37 @@ fn an_interrupted_run_logs_its_summary_and_keeps_its_frames() {
     let pvd = std::fs::read_to_string(out.join("dam_break.pvd")).expect("series");
     assert!(frames >= 4 && on_disk == frames && pvd.matches("<DataSet").count() as u64 == frames, "{frames} {on_disk} {pvd}");
     assert!(log["summary"]["simulated_s"].as_f64().expect("time") < 1.0, "stopped before the end");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `output.vtu_encoding = "base64"` writes frames that a reader other than coil's opens
+/// (vtkio, which splashsurf reads frames with, and which refuses raw appended data), with
+/// every value that the raw frame of the same run holds.
+#[test]
+fn base64_frames_open_in_an_independent_reader_with_the_raw_frames_values() {
+    use vtkio::model::{Attribute, DataSet, IOBuffer, Piece};
+    let dir = std::env::temp_dir().join(format!("coil-base64-{}", std::process::id()));
+    let (raw, base64) = (dir.join("raw"), dir.join("base64"));
+    for (out, encoding) in [(&raw, "raw"), (&base64, "base64")] {
+        let set = format!("output.vtu_encoding={encoding}");
+        let ran = common::coil(&dam_break_run(out, &["simulation.end_time_s=0.0004", "output.every_steps=1", &set]));
+        assert!(ran.status.success(), "{}", String::from_utf8_lossy(&ran.stderr));
+    }
+    let frame = |dir: &std::path::Path| coil::output::vtu_read::read_frame(&dir.join("frame_000001.vtu")).expect("a frame");
+    let expected = frame(&raw);
+    assert_eq!(frame(&base64), expected, "coil reads the base64 frame as the raw one");
+    let vtk = vtkio::Vtk::import(base64.join("frame_000001.vtu")).expect("vtkio reads the base64 frame");
+    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else { panic!("not an unstructured grid") };
+    let Some(Piece::Inline(piece)) = pieces.into_iter().next() else { panic!("no inline piece") };
+    let IOBuffer::F64(points) = &piece.points else { panic!("positions not f64: {:?}", piece.points.scalar_type()) };
+    assert_eq!(points.chunks(3).map(|p| [p[0], p[1], p[2]]).collect::<Vec<_>>(), expected.position);
+    let density = piece.data.point.iter().find_map(|a| match a {
+        Attribute::DataArray(array) if array.name == "density" => Some(&array.data),
+        _ => None,
+    });
+    let Some(IOBuffer::F32(density)) = density else { panic!("no f32 density array") };
+    assert_eq!(density, &expected.scalars["density"]);
+    assert!(vtkio::Vtk::import(base64.join("boundary.vtu")).is_ok(), "the walls' frame");
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -49,6 +49,7 @@ fn bad_scenes_exit_2_naming_file_and_field() {
         ("cross_n = 1.0", "cross_n = 0.0", "material.viscosity.cross_n"),
         ("cross_n = 1.0", "cross_nn = 1.0", "did you mean `cross_n`?"),
         ("nu0_m2_s = 0.05", "nu0_m2s = 0.05", "did you mean `nu0_m2_s`?"),
+        ("cross_k_s = 1.0", "cross_k = 1.0", "did you mean `cross_k_s`?"),
         ("particle_spacing_m = 0.02", "particle_spacing_m = 0.0", "material.particle_spacing_m"),
         (
             "max_m = [0.4, 0.4, 0.4]",

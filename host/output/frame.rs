@@ -1,7 +1,7 @@
 //! Per-particle output fields of the fluid, gathered from a run into reusable buffers.
 
 use crate::output::points::{encode_ply, encode_xyz};
-use crate::output::vtu::{encode, Field};
+use crate::output::vtu::{encode, Field, VtuEncoding};
 use crate::simulation::model::Model;
 use crate::simulation::particles::{vec3_view, HostParticles};
 use crate::simulation::RunState;
@@ -89,8 +89,8 @@ impl Frame {
         &self.bytes
     }
 
-    /// The frame as a `.vtu` file's bytes.
-    pub fn to_vtu(&mut self) -> &[u8] {
+    /// The frame as a `.vtu` file's bytes, its arrays held as `encoding` says.
+    pub fn to_vtu(&mut self, encoding: VtuEncoding) -> &[u8] {
         let fields = [
             Field::Vector("velocity", &self.velocity),
             Field::Scalar("density", &self.density),
@@ -99,7 +99,7 @@ impl Frame {
             Field::Scalar("shear_rate", &self.shear_rate),
             Field::Id("id", &self.id),
         ];
-        encode(&self.position, &fields, &mut self.bytes);
+        encode(&self.position, &fields, encoding, &mut self.bytes);
         &self.bytes
     }
 }

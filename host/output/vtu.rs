@@ -1,4 +1,5 @@
-//! VTK XML unstructured-grid frames (`.vtu`, appended raw binary) and their `.pvd` series.
+//! VTK XML unstructured-grid frames (`.vtu`, appended raw binary or inline base64) and their
+//! `.pvd` series.
 
 use super::write_atomically;
 use std::fmt::Write as _;
@@ -12,66 +13,121 @@ pub enum Field<'a> {
     Id(&'a str, &'a [u32]),
 }
 
-/// Encodes a frame of particles as vertex cells with point data. `bytes` is reused between
-/// frames so writing allocates nothing once it has grown.
-pub fn encode(positions: &[[f64; 3]], fields: &[Field], bytes: &mut Vec<u8>) {
-    let n = positions.len();
-    let mut header = String::new();
-    let mut offset = 0usize;
-    let mut array = |header: &mut String, ty: &str, name: &str, comps: usize, size: usize| {
-        let _ = writeln!(
-            header,
-            r#"        <DataArray type="{ty}" Name="{name}" NumberOfComponents="{comps}" format="appended" offset="{offset}"/>"#
-        );
-        offset += 8 + n * comps * size;
-    };
-    header.push_str("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n");
-    let _ = writeln!(header, r#"    <Piece NumberOfPoints="{n}" NumberOfCells="{n}">"#);
-    header.push_str("      <PointData>\n");
-    for f in fields {
-        match f {
-            Field::Scalar(name, _) => array(&mut header, "Float32", name, 1, 4),
-            Field::Vector(name, _) => array(&mut header, "Float32", name, 3, 4),
-            Field::Id(name, _) => array(&mut header, "UInt32", name, 1, 4),
-        }
+/// How a `.vtu` frame holds its arrays.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VtuEncoding {
+    /// Appended raw binary: the smallest and fastest to write; ParaView reads it, meshio and
+    /// vtkio (splashsurf) do not.
+    #[default]
+    Raw,
+    /// Each array inline in base64 (`format="binary"`, header and data in one stream, as VTK
+    /// writes them): a third larger, and read by ParaView, meshio and vtkio alike.
+    Base64,
+}
+
+/// One array's bytes, as its UInt64 block header announces them.
+fn array_bytes(f: &Field, bytes: &mut Vec<u8>) {
+    match f {
+        Field::Scalar(_, v) => v.iter().for_each(|x| bytes.extend_from_slice(&x.to_le_bytes())),
+        Field::Vector(_, v) => v.iter().flatten().for_each(|x| bytes.extend_from_slice(&x.to_le_bytes())),
+        Field::Id(_, v) => v.iter().for_each(|x| bytes.extend_from_slice(&x.to_le_bytes())),
     }
-    header.push_str("      </PointData>\n      <Points>\n");
-    array(&mut header, "Float64", "position", 3, 8);
-    header.push_str("      </Points>\n      <Cells>\n");
-    array(&mut header, "Int32", "connectivity", 1, 4);
-    array(&mut header, "Int32", "offsets", 1, 4);
-    array(&mut header, "UInt8", "types", 1, 1);
-    header.push_str("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n   _");
+}
+
+/// Encodes a frame of particles as vertex cells with point data, its arrays held as
+/// `encoding` says. `bytes` is reused between frames so writing allocates nothing once it has
+/// grown (in the raw encoding).
+pub fn encode(positions: &[[f64; 3]], fields: &[Field], encoding: VtuEncoding, bytes: &mut Vec<u8>) {
+    let n = positions.len();
+    // Each array: its VTK type, name and components, and a writer of its bytes.
+    type Write<'f> = Box<dyn Fn(&mut Vec<u8>) + 'f>;
+    let mut arrays: Vec<(&str, &str, usize, Write)> = Vec::with_capacity(fields.len() + 4);
+    for f in fields {
+        let (ty, name, comps) = match f {
+            Field::Scalar(name, _) => ("Float32", *name, 1),
+            Field::Vector(name, _) => ("Float32", *name, 3),
+            Field::Id(name, _) => ("UInt32", *name, 1),
+        };
+        arrays.push((ty, name, comps, Box::new(move |b: &mut Vec<u8>| array_bytes(f, b))));
+    }
+    let point_data = arrays.len();
+    arrays.push(("Float64", "position", 3, Box::new(|b: &mut Vec<u8>| {
+        positions.iter().flatten().for_each(|x| b.extend_from_slice(&x.to_le_bytes()))
+    })));
+    arrays.push(("Int32", "connectivity", 1, Box::new(move |b: &mut Vec<u8>| {
+        (0..n as i32).for_each(|k| b.extend_from_slice(&k.to_le_bytes()))
+    })));
+    arrays.push(("Int32", "offsets", 1, Box::new(move |b: &mut Vec<u8>| {
+        (1..=n as i32).for_each(|k| b.extend_from_slice(&k.to_le_bytes()))
+    })));
+    // VTK_VERTEX
+    arrays.push(("UInt8", "types", 1, Box::new(move |b: &mut Vec<u8>| b.extend(std::iter::repeat_n(1u8, n)))));
+    let size = |ty: &str| match ty {
+        "Float64" => 8,
+        "UInt8" => 1,
+        _ => 4,
+    };
 
     bytes.clear();
-    bytes.extend_from_slice(header.as_bytes());
-    let block = |bytes: &mut Vec<u8>, len: usize| bytes.extend_from_slice(&(len as u64).to_le_bytes());
-    for f in fields {
-        match f {
-            Field::Scalar(_, v) => {
-                block(bytes, 4 * n);
-                v.iter().for_each(|x| bytes.extend_from_slice(&x.to_le_bytes()));
+    bytes.extend_from_slice(b"<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n");
+    let _ = write!(Text(bytes), "    <Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{n}\">\n      <PointData>\n");
+    let mut offset = 0usize;
+    let mut scratch = Vec::new();
+    for (k, (ty, name, comps, write)) in arrays.iter().enumerate() {
+        match k {
+            _ if k == point_data => bytes.extend_from_slice(b"      </PointData>\n      <Points>\n"),
+            _ if k == point_data + 1 => bytes.extend_from_slice(b"      </Points>\n      <Cells>\n"),
+            _ => {}
+        }
+        let len = n * comps * size(ty);
+        match encoding {
+            VtuEncoding::Raw => {
+                let _ = writeln!(
+                    Text(bytes),
+                    r#"        <DataArray type="{ty}" Name="{name}" NumberOfComponents="{comps}" format="appended" offset="{offset}"/>"#
+                );
+                offset += 8 + len;
             }
-            Field::Vector(_, v) => {
-                block(bytes, 12 * n);
-                v.iter().flatten().for_each(|x| bytes.extend_from_slice(&x.to_le_bytes()));
-            }
-            Field::Id(_, v) => {
-                block(bytes, 4 * n);
-                v.iter().for_each(|x| bytes.extend_from_slice(&x.to_le_bytes()));
+            VtuEncoding::Base64 => {
+                let _ = write!(Text(bytes), r#"        <DataArray type="{ty}" Name="{name}" NumberOfComponents="{comps}" format="binary">"#);
+                scratch.clear();
+                scratch.extend_from_slice(&(len as u64).to_le_bytes());
+                write(&mut scratch);
+                base64_into(&scratch, bytes);
+                bytes.extend_from_slice(b"</DataArray>\n");
             }
         }
     }
-    block(bytes, 24 * n);
-    positions.iter().flatten().for_each(|x| bytes.extend_from_slice(&x.to_le_bytes()));
-    block(bytes, 4 * n);
-    (0..n as i32).for_each(|k| bytes.extend_from_slice(&k.to_le_bytes()));
-    block(bytes, 4 * n);
-    (1..=n as i32).for_each(|k| bytes.extend_from_slice(&k.to_le_bytes()));
-    block(bytes, n);
-    // VTK_VERTEX
-    bytes.extend(std::iter::repeat_n(1u8, n));
-    bytes.extend_from_slice(b"\n  </AppendedData>\n</VTKFile>\n");
+    bytes.extend_from_slice(b"      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n");
+    if encoding == VtuEncoding::Raw {
+        bytes.extend_from_slice(b"  <AppendedData encoding=\"raw\">\n   _");
+        for (ty, _, comps, write) in &arrays {
+            bytes.extend_from_slice(&((n * comps * size(ty)) as u64).to_le_bytes());
+            write(bytes);
+        }
+        bytes.extend_from_slice(b"\n  </AppendedData>\n");
+    }
+    bytes.extend_from_slice(b"</VTKFile>\n");
+}
+
+/// Appends the standard base64 encoding of `data` (padded) to `out`.
+fn base64_into(data: &[u8], out: &mut Vec<u8>) {
+    use base64::Engine as _;
+    let start = out.len();
+    out.resize(start + data.len().div_ceil(3) * 4, 0);
+    let written = base64::engine::general_purpose::STANDARD.encode_slice(data, &mut out[start..]).expect("sized for the padded encoding");
+    out.truncate(start + written);
+}
+
+/// `write!` into a byte buffer.
+struct Text<'a>(&'a mut Vec<u8>);
+
+impl std::fmt::Write for Text<'_> {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        self.0.extend_from_slice(s.as_bytes());
+        Ok(())
+    }
 }
 
 /// The `.pvd` series of a run of scene `scene_name` in output folder `dir`.

@@ -1,6 +1,7 @@
-//! Reads back the `.vtu` frames that `vtu::encode` writes (appended raw binary, UInt64 block
-//! headers) and the `.pvd` series that lists them, for `coil preview`, `coil axis` and the
-//! round-trip test. Other VTK writers' files are refused with a reason rather than misread.
+//! Reads back the `.vtu` frames that `vtu::encode` writes (appended raw binary or inline base64,
+//! UInt64 block headers) and the `.pvd` series that lists them, for `coil preview`, `coil axis`
+//! and the round-trip test. Other VTK writers' files are refused with a reason rather than
+//! misread.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -17,11 +18,17 @@ pub struct FrameData {
     pub id: Vec<u32>,
 }
 
-struct ArrayHeader {
+struct ArrayHeader<'a> {
     ty: String,
     name: String,
     components: usize,
-    offset: usize,
+    /// Where its block starts in the appended data, or its inline base64 text.
+    place: Place<'a>,
+}
+
+enum Place<'a> {
+    Appended(usize),
+    Inline(&'a str),
 }
 
 fn attribute(tag: &str, name: &str) -> Option<String> {
@@ -55,16 +62,20 @@ pub fn read_series(path: &Path) -> Result<Vec<(f64, String)>, String> {
 /// Parses the bytes of a frame file.
 pub fn parse(bytes: &[u8]) -> Result<FrameData, String> {
     let marker = b"<AppendedData encoding=\"raw\">";
-    let at = bytes
-        .windows(marker.len())
-        .position(|w| w == marker)
-        .ok_or("not a coil frame: no raw appended data (was it written by coil?)")?;
-    let header = std::str::from_utf8(&bytes[..at]).map_err(|_| "header is not UTF-8")?;
+    let appended = bytes.windows(marker.len()).position(|w| w == marker);
+    let header = std::str::from_utf8(&bytes[..appended.unwrap_or(bytes.len())]).map_err(|_| {
+        "not a coil frame: no raw appended data, and not text as base64 arrays are (was it written by coil?)"
+    })?;
     if !header.contains("header_type=\"UInt64\"") {
         return Err("not a coil frame: block headers are not UInt64".into());
     }
-    let underscore = bytes[at..].iter().position(|&b| b == b'_').ok_or("appended data has no '_' start")?;
-    let data = &bytes[at + underscore + 1..];
+    let data = match appended {
+        Some(at) => {
+            let underscore = bytes[at..].iter().position(|&b| b == b'_').ok_or("appended data has no '_' start")?;
+            &bytes[at + underscore + 1..]
+        }
+        None => &[],
+    };
     let n: usize = header
         .find("<Piece ")
         .and_then(|p| attribute(&header[p..], "NumberOfPoints"))
@@ -74,22 +85,44 @@ pub fn parse(bytes: &[u8]) -> Result<FrameData, String> {
         .split("<DataArray")
         .skip(1)
         .map(|tag| {
-            let tag = &tag[..tag.find('>').unwrap_or(tag.len())];
+            let end = tag.find('>').unwrap_or(tag.len());
+            let (attributes, rest) = (&tag[..end], &tag[(end + 1).min(tag.len())..]);
+            let place = match attribute(attributes, "format").as_deref() {
+                Some("binary") => Place::Inline(rest[..rest.find("</DataArray>").ok_or("an inline DataArray not closed")?].trim()),
+                _ => Place::Appended(attribute(attributes, "offset").and_then(|c| c.parse().ok()).ok_or("DataArray without offset")?),
+            };
             Ok(ArrayHeader {
-                ty: attribute(tag, "type").ok_or("DataArray without type")?,
-                name: attribute(tag, "Name").ok_or("DataArray without Name")?,
-                components: attribute(tag, "NumberOfComponents").and_then(|c| c.parse().ok()).unwrap_or(1),
-                offset: attribute(tag, "offset").and_then(|c| c.parse().ok()).ok_or("DataArray without offset")?,
+                ty: attribute(attributes, "type").ok_or("DataArray without type")?,
+                name: attribute(attributes, "Name").ok_or("DataArray without Name")?,
+                components: attribute(attributes, "NumberOfComponents").and_then(|c| c.parse().ok()).unwrap_or(1),
+                place,
             })
         })
         .collect::<Result<_, &str>>()?;
-    let block = |a: &ArrayHeader, size: usize| -> Result<&[u8], String> {
-        let len_bytes = data.get(a.offset..a.offset + 8).ok_or(format!("array {} lies past the end of the file", a.name))?;
-        let len = u64::from_le_bytes(len_bytes.try_into().expect("8 bytes")) as usize;
-        if len != n * a.components * size {
-            return Err(format!("array {} holds {len} bytes, expected {}", a.name, n * a.components * size));
+    let block = |a: &ArrayHeader, size: usize| -> Result<Vec<u8>, String> {
+        let expected = n * a.components * size;
+        let (len, block) = match a.place {
+            Place::Appended(offset) => {
+                let len_bytes = data.get(offset..offset + 8).ok_or(format!("array {} lies past the end of the file", a.name))?;
+                let len = u64::from_le_bytes(len_bytes.try_into().expect("8 bytes")) as usize;
+                (len, data.get(offset + 8..offset + 8 + len.min(expected)).ok_or(format!("array {} is truncated", a.name))?.to_vec())
+            }
+            Place::Inline(text) => {
+                use base64::Engine as _;
+                let mut block =
+                    base64::engine::general_purpose::STANDARD.decode(text).map_err(|e| format!("array {}: {e}", a.name))?;
+                if block.len() < 8 {
+                    return Err(format!("array {} is truncated", a.name));
+                }
+                let len = u64::from_le_bytes(block[..8].try_into().expect("8 bytes")) as usize;
+                block.drain(..8);
+                (len, block)
+            }
+        };
+        if len != expected || block.len() != expected {
+            return Err(format!("array {} holds {len} bytes, expected {expected}", a.name));
         }
-        data.get(a.offset + 8..a.offset + 8 + len).ok_or(format!("array {} is truncated", a.name))
+        Ok(block)
     };
     let mut frame = FrameData::default();
     for a in &arrays {

@@ -555,7 +555,7 @@ fn drive<R: Real, M: Model<R>, B: StepBackend<R>>(
 
     let mut bytes = Vec::new();
     let boundary_path = dir.join("boundary.vtu");
-    encode(&initial.boundary, &[] as &[Field], &mut bytes);
+    encode(&initial.boundary, &[] as &[Field], scene.output.vtu_encoding, &mut bytes);
     write_atomically(&boundary_path, &bytes).map_err(|e| io_error("boundary", &boundary_path, e))?;
 
     let end = scene.simulation.end_time_s;
@@ -579,7 +579,7 @@ fn drive<R: Real, M: Model<R>, B: StepBackend<R>>(
         let path = dir.join(&name);
         for format in &scene.output.formats {
             let (file, bytes) = match format {
-                FrameFormat::Vtu => (path.clone(), frame.to_vtu()),
+                FrameFormat::Vtu => (path.clone(), frame.to_vtu(scene.output.vtu_encoding)),
                 FrameFormat::Ply => (path.with_extension("ply"), frame.to_ply()),
                 FrameFormat::Xyz => (path.with_extension("xyz"), frame.to_xyz()),
             };

@@ -8,6 +8,7 @@ pub mod particle_limit;
 pub mod setup;
 pub mod toml_field;
 
+use crate::output::vtu::VtuEncoding;
 use overrides::Override;
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -333,6 +334,14 @@ pub struct Output {
     /// `xyz` (positions as f32 triples, which splashsurf meshes directly).
     #[serde(default = "default_formats")]
     pub formats: Vec<FrameFormat>,
+    /// How `.vtu` frames hold their arrays: `raw` (appended binary, for ParaView; the default)
+    /// or `base64` (inline, which meshio and splashsurf also read).
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub vtu_encoding: VtuEncoding,
+}
+
+fn is_default<T: Default + PartialEq>(value: &T) -> bool {
+    *value == T::default()
 }
 
 /// A file format of output frames.
@@ -350,7 +359,7 @@ fn default_formats() -> Vec<FrameFormat> {
 
 impl Default for Output {
     fn default() -> Self {
-        Self { every_s: Some(0.01), every_steps: None, formats: default_formats() }
+        Self { every_s: Some(0.01), every_steps: None, formats: default_formats(), vtu_encoding: VtuEncoding::Raw }
     }
 }
 
@@ -470,18 +479,21 @@ fn scene_text(path: &Path) -> Result<String, SceneError> {
 }
 
 /// For serde's "unknown field `x`, expected one of `a`, `b`" (or "expected `a` or `b`"): the
-/// nearest valid name, when it is a plausible typo.
+/// valid name that adds a unit to `x` (`cross_k` for `cross_k_s`: the unit is what users leave
+/// out), else the nearest valid name, when it is a plausible typo.
 fn suggestion(message: &str) -> String {
     let Some(rest) = message.strip_prefix("unknown field `") else { return String::new() };
     let Some((unknown, expected)) = rest.split_once('`') else { return String::new() };
-    let nearest = expected
-        .split('`')
-        .skip(1)
-        .step_by(2)
-        .map(|name| (edit_distance(unknown, name), name))
-        .min()
-        .filter(|&(d, name)| d <= 1 + name.len().max(unknown.len()) / 3);
-    nearest.map(|(_, name)| format!("; did you mean `{name}`?")).unwrap_or_default()
+    let names = || expected.split('`').skip(1).step_by(2);
+    let with_unit = names().find(|name| name.strip_prefix(unknown).is_some_and(|unit| unit.starts_with('_')));
+    let nearest = || {
+        names()
+            .map(|name| (edit_distance(unknown, name), name))
+            .min()
+            .filter(|&(d, name)| d <= 1 + name.len().max(unknown.len()) / 3)
+            .map(|(_, name)| name)
+    };
+    with_unit.or_else(nearest).map(|name| format!("; did you mean `{name}`?")).unwrap_or_default()
 }
 
 /// Levenshtein distance between two names.
