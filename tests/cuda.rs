@@ -313,7 +313,7 @@ fn mirrored_walls_on_the_gpu_agree_with_the_cpu() {
 #[test]
 fn the_spiky_density_on_the_gpu_agrees_with_the_cpu() {
     let mut scene = dam_break();
-    scene.material.density_kernel = coil::scene::DensityKernel::Spiky;
+    scene.material.density_kernel = coil::scene::DensityKernelKind::Spiky;
     for engine in engines() {
         assert_f64_agreement(engine, "spiky density", f64_difference_after_50_steps(engine, &scene, cross::<f64>(&scene)));
     }

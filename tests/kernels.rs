@@ -2,7 +2,7 @@
 
 mod common;
 
-use coil::scene::DensityKernel;
+use coil::scene::DensityKernelKind;
 use coil_kernels::cell_grid::Neighbors;
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
@@ -61,7 +61,7 @@ fn viscosity_laplacian_matches_its_closed_form_integral() {
 /// V (f(x_j) - f(0)) weight(r^2), with the layers at y = +s and -s shifted along x by +shift
 /// and -shift (a lattice sheared by half its spacing at shift = s / 2).
 fn lattice_laplacian(s: f64, h: f64, shift: f64, f: impl Fn(f64, f64, f64) -> f64, weight: impl Fn(f64) -> f64) -> f64 {
-    let volume = coil::scene::setup::calibrated_mass(1000.0, s, h, DensityKernel::Poly6) / 1000.0;
+    let volume = coil::scene::setup::calibrated_mass(1000.0, s, h, DensityKernelKind::Poly6) / 1000.0;
     let n = (h / s).ceil() as i64 + 1;
     let mut sum = 0.0;
     for k in -n..=n {
@@ -81,7 +81,7 @@ fn lattice_laplacian(s: f64, h: f64, shift: f64, f: impl Fn(f64, f64, f64) -> f6
 #[test]
 fn morris_laplacian_keeps_its_calibration_on_a_sheared_lattice() {
     let (s, h) = (0.01, 0.02);
-    let k = coil::scene::setup::calibrated_kernels::<f64>(1000.0, s, h, DensityKernel::Poly6);
+    let k = coil::scene::setup::calibrated_kernels::<f64>(1000.0, s, h, DensityKernelKind::Poly6);
     let y2 = |_: f64, y: f64, _: f64| y * y;
     let xz = |x: f64, _: f64, z: f64| x * x + z * z;
     for (name, weight) in
@@ -625,8 +625,8 @@ fn sorted_lattice(
     let mut grid = coil::cpu::neighbor_grid::NeighborGrid::new([0.0; 3], [cells as f64 * s; 3], h, [false; 3], p.capacity());
     grid.sort(&mut p);
     let fluid = Fluid {
-        mass: calibrated_mass(rho0, s, h, DensityKernel::Poly6),
-        kernels: calibrated_kernels(rho0, s, h, DensityKernel::Poly6),
+        mass: calibrated_mass(rho0, s, h, DensityKernelKind::Poly6),
+        kernels: calibrated_kernels(rho0, s, h, DensityKernelKind::Poly6),
         ..fluid::<f64>()
     };
     (p, grid, fluid)

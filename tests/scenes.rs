@@ -361,7 +361,7 @@ fn check_reports_counts_the_equation_10_bound_and_a_calibrated_estimate() {
     // The jet: no fluid at t = 0; the inlet delivers rho0 A U / m particles per second.
     let jet = Scene::load(&dir.join("round_jet.toml")).expect("valid");
     let r = check(&jet, "round_jet.toml", None, std::time::Duration::from_millis(200)).expect("valid");
-    let mass = coil::scene::setup::calibrated_mass(1000.0, 0.004, 0.008, coil::scene::DensityKernel::Poly6);
+    let mass = coil::scene::setup::calibrated_mass(1000.0, 0.004, 0.008, coil::scene::DensityKernelKind::Poly6);
     let rate = 1000.0 * std::f64::consts::PI * 0.01 * 0.01 * 1.0 / mass;
     assert!(r.initial_fluid == 0 && (r.inlet_rate - rate).abs() < 1e-9 * rate, "{} vs {rate}", r.inlet_rate);
     assert_eq!(r.final_fluid, ((rate * 0.8) as usize).min(4200));

@@ -317,7 +317,7 @@ fn an_empty_scene_and_a_single_particle_run_cleanly() {
 /// within the start-up case's 3 % of the series.
 #[test]
 fn a_high_sound_speed_channel_stays_laminar_with_the_spiky_density() {
-    use coil::scene::{DensityKernel, ViscosityOperator};
+    use coil::scene::{DensityKernelKind, ViscosityOperator};
     use coil::validation::poiseuille::{startup_velocity, Channel};
     use coil::validation::snapshot::snapshots;
     let t = 0.6;
@@ -335,9 +335,9 @@ fn a_high_sound_speed_channel_stays_laminar_with_the_spiky_density() {
             / peak;
         (snap.velocity.iter().map(|v| v[1].abs()).fold(0.0, f64::max) / peak, error)
     };
-    let (spiky, error) = wall_normal(DensityKernel::Spiky);
+    let (spiky, error) = wall_normal(DensityKernelKind::Spiky);
     assert!(spiky < 1e-3 && error < 0.03, "spiky density: wall-normal speed {spiky:.3e}, error {error:.4} of the peak");
-    let (poly6, _) = wall_normal(DensityKernel::Poly6);
+    let (poly6, _) = wall_normal(DensityKernelKind::Poly6);
     assert!(
         poly6 > 0.1,
         "poly6 density: wall-normal speed {poly6:.3e} of the peak; the flutter docs/scene-format.md describes is gone"

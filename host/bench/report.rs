@@ -2,7 +2,7 @@
 //! measurement and of the GPU's kernels, and a PNG plot of time per step against particles.
 
 use crate::bench::{precision_name, BenchBackend, BenchOptions, BenchReport, Measurement, TABLE_I};
-use crate::output::plot::{Axis, Chart, Line, Series, PALETTE};
+use crate::output::plot::{Axis, Chart, Curve, Line, PALETTE};
 use crate::scene::Precision;
 use std::fmt::Write;
 
@@ -214,7 +214,7 @@ pub fn chart(report: &BenchReport) -> Chart {
                 .collect();
             if !points.is_empty() {
                 let label = format!("coil {} {}", backend.name(), precision_name(precision));
-                series.push(Series::new(label, colour.next().unwrap_or(PALETTE[7]), points));
+                series.push(Curve::new(label, colour.next().unwrap_or(PALETTE[7]), points));
             }
         }
     }
@@ -226,7 +226,7 @@ pub fn chart(report: &BenchReport) -> Chart {
     let paper_cpu = shown.iter().filter_map(|(n, r)| r.paper_cpu_ms.map(|c| [*n, c])).collect();
     let paper_gpu = shown.iter().map(|(n, r)| [*n, r.paper_gpu_ms]).collect();
     for (label, points, c) in [("paper cpu (1 core)", paper_cpu, PALETTE[6]), ("paper gtx 650", paper_gpu, PALETTE[7])] {
-        series.push(Series { label: label.into(), color: c, points, line: Line::Dashed, marker: 3.0 });
+        series.push(Curve { label: label.into(), color: c, points, line: Line::Dashed, marker: 3.0 });
     }
     Chart {
         title: "dam break step time (table I)".into(),

@@ -31,7 +31,7 @@ pub enum Line {
 
 /// One curve or point set.
 #[derive(Debug, Clone)]
-pub struct Series {
+pub struct Curve {
     pub label: String,
     pub color: [u8; 3],
     /// (x, y) points; non-finite ones, and non-positive ones on a logarithmic axis, are skipped.
@@ -41,7 +41,7 @@ pub struct Series {
     pub marker: f64,
 }
 
-impl Series {
+impl Curve {
     /// A solid line with markers.
     pub fn new(label: impl Into<String>, color: [u8; 3], points: Vec<[f64; 2]>) -> Self {
         Self { label: label.into(), color, points, line: Line::Solid, marker: 3.0 }
@@ -143,7 +143,7 @@ pub struct Chart {
     pub title: String,
     pub x: Axis,
     pub y: Axis,
-    pub series: Vec<Series>,
+    pub series: Vec<Curve>,
 }
 
 impl Chart {
@@ -248,7 +248,7 @@ mod tests {
             title: "T".into(),
             x: Axis::linear("x"),
             y: Axis::log("y"),
-            series: vec![Series {
+            series: vec![Curve {
                 label: "s".into(),
                 color: PALETTE[1],
                 points: vec![[0.0, 1.0], [1.0, 100.0]],

@@ -52,15 +52,24 @@ pub fn encode(positions: &[[f64; 3]], fields: &[Field], encoding: VtuEncoding, b
         arrays.push((ty, name, comps, Box::new(move |b: &mut Vec<u8>| array_bytes(f, b))));
     }
     let point_data = arrays.len();
-    arrays.push(("Float64", "position", 3, Box::new(|b: &mut Vec<u8>| {
-        positions.iter().flatten().for_each(|x| b.extend_from_slice(&x.to_le_bytes()))
-    })));
-    arrays.push(("Int32", "connectivity", 1, Box::new(move |b: &mut Vec<u8>| {
-        (0..n as i32).for_each(|k| b.extend_from_slice(&k.to_le_bytes()))
-    })));
-    arrays.push(("Int32", "offsets", 1, Box::new(move |b: &mut Vec<u8>| {
-        (1..=n as i32).for_each(|k| b.extend_from_slice(&k.to_le_bytes()))
-    })));
+    arrays.push((
+        "Float64",
+        "position",
+        3,
+        Box::new(|b: &mut Vec<u8>| positions.iter().flatten().for_each(|x| b.extend_from_slice(&x.to_le_bytes()))),
+    ));
+    arrays.push((
+        "Int32",
+        "connectivity",
+        1,
+        Box::new(move |b: &mut Vec<u8>| (0..n as i32).for_each(|k| b.extend_from_slice(&k.to_le_bytes()))),
+    ));
+    arrays.push((
+        "Int32",
+        "offsets",
+        1,
+        Box::new(move |b: &mut Vec<u8>| (1..=n as i32).for_each(|k| b.extend_from_slice(&k.to_le_bytes()))),
+    ));
     // VTK_VERTEX
     arrays.push(("UInt8", "types", 1, Box::new(move |b: &mut Vec<u8>| b.extend(std::iter::repeat_n(1u8, n)))));
     let size = |ty: &str| match ty {
@@ -90,7 +99,10 @@ pub fn encode(positions: &[[f64; 3]], fields: &[Field], encoding: VtuEncoding, b
                 offset += 8 + len;
             }
             VtuEncoding::Base64 => {
-                let _ = write!(Text(bytes), r#"        <DataArray type="{ty}" Name="{name}" NumberOfComponents="{comps}" format="binary">"#);
+                let _ = write!(
+                    Text(bytes),
+                    r#"        <DataArray type="{ty}" Name="{name}" NumberOfComponents="{comps}" format="binary">"#
+                );
                 scratch.clear();
                 scratch.extend_from_slice(&(len as u64).to_le_bytes());
                 write(&mut scratch);
@@ -116,7 +128,8 @@ fn base64_into(data: &[u8], out: &mut Vec<u8>) {
     use base64::Engine as _;
     let start = out.len();
     out.resize(start + data.len().div_ceil(3) * 4, 0);
-    let written = base64::engine::general_purpose::STANDARD.encode_slice(data, &mut out[start..]).expect("sized for the padded encoding");
+    let written =
+        base64::engine::general_purpose::STANDARD.encode_slice(data, &mut out[start..]).expect("sized for the padded encoding");
     out.truncate(start + written);
 }
 
@@ -136,12 +149,12 @@ pub fn series_path(dir: &Path, scene_name: &str) -> PathBuf {
 }
 
 /// A `.pvd` collection listing every frame written so far.
-pub struct Series {
+pub struct PvdSeries {
     path: PathBuf,
     entries: Vec<(f64, String)>,
 }
 
-impl Series {
+impl PvdSeries {
     /// A series with room for `capacity` frames that already lists `earlier`: (time (s), file)
     /// of the frames a resumed run wrote before it stopped.
     pub fn new(path: PathBuf, capacity: usize, earlier: Vec<(f64, String)>) -> Self {

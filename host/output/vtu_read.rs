@@ -63,9 +63,8 @@ pub fn read_series(path: &Path) -> Result<Vec<(f64, String)>, String> {
 pub fn parse(bytes: &[u8]) -> Result<FrameData, String> {
     let marker = b"<AppendedData encoding=\"raw\">";
     let appended = bytes.windows(marker.len()).position(|w| w == marker);
-    let header = std::str::from_utf8(&bytes[..appended.unwrap_or(bytes.len())]).map_err(|_| {
-        "not a coil frame: no raw appended data, and not text as base64 arrays are (was it written by coil?)"
-    })?;
+    let header = std::str::from_utf8(&bytes[..appended.unwrap_or(bytes.len())])
+        .map_err(|_| "not a coil frame: no raw appended data, and not text as base64 arrays are (was it written by coil?)")?;
     if !header.contains("header_type=\"UInt64\"") {
         return Err("not a coil frame: block headers are not UInt64".into());
     }
@@ -88,8 +87,12 @@ pub fn parse(bytes: &[u8]) -> Result<FrameData, String> {
             let end = tag.find('>').unwrap_or(tag.len());
             let (attributes, rest) = (&tag[..end], &tag[(end + 1).min(tag.len())..]);
             let place = match attribute(attributes, "format").as_deref() {
-                Some("binary") => Place::Inline(rest[..rest.find("</DataArray>").ok_or("an inline DataArray not closed")?].trim()),
-                _ => Place::Appended(attribute(attributes, "offset").and_then(|c| c.parse().ok()).ok_or("DataArray without offset")?),
+                Some("binary") => {
+                    Place::Inline(rest[..rest.find("</DataArray>").ok_or("an inline DataArray not closed")?].trim())
+                }
+                _ => Place::Appended(
+                    attribute(attributes, "offset").and_then(|c| c.parse().ok()).ok_or("DataArray without offset")?,
+                ),
             };
             Ok(ArrayHeader {
                 ty: attribute(attributes, "type").ok_or("DataArray without type")?,
@@ -105,7 +108,12 @@ pub fn parse(bytes: &[u8]) -> Result<FrameData, String> {
             Place::Appended(offset) => {
                 let len_bytes = data.get(offset..offset + 8).ok_or(format!("array {} lies past the end of the file", a.name))?;
                 let len = u64::from_le_bytes(len_bytes.try_into().expect("8 bytes")) as usize;
-                (len, data.get(offset + 8..offset + 8 + len.min(expected)).ok_or(format!("array {} is truncated", a.name))?.to_vec())
+                (
+                    len,
+                    data.get(offset + 8..offset + 8 + len.min(expected))
+                        .ok_or(format!("array {} is truncated", a.name))?
+                        .to_vec(),
+                )
             }
             Place::Inline(text) => {
                 use base64::Engine as _;

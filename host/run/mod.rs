@@ -8,7 +8,7 @@ pub mod run_log;
 use crate::cpu::parallel::on_worker;
 use crate::output::frame::Frame;
 use crate::output::preview::{own_range, render, speeds, Coloring, View};
-use crate::output::vtu::{encode, series_path, Field, Series};
+use crate::output::vtu::{encode, series_path, Field, PvdSeries};
 use crate::output::write_atomically;
 use crate::run::run_log::{resolved, Resumed, RunLog};
 use crate::scene::setup::{initial_particles, InitialParticles};
@@ -570,7 +570,7 @@ fn drive<R: Real, M: Model<R>, B: StepBackend<R>>(
     let series_path = series_path(dir, &scene.name);
     let listed =
         if writes_series { tally.frame_times.iter().enumerate().map(|(k, &t)| (t, frame_name(k))).collect() } else { Vec::new() };
-    let mut series = Series::new(series_path.clone(), expected_frames, listed);
+    let mut series = PvdSeries::new(series_path.clone(), expected_frames, listed);
     let mut frame = Frame::default();
     let started = Instant::now();
     let mut write_frame = |run: &RunState<R, M>, host: &HostParticles<R>, tally: &mut Tally| -> Result<(), RunError> {

@@ -42,7 +42,7 @@ pub struct Scene {
     pub notes: String,
     pub material: Material,
     pub domain: Domain,
-    pub simulation: Simulation,
+    pub simulation: SimulationSettings,
     #[serde(default)]
     pub output: Output,
     #[serde(default, rename = "fluid_block")]
@@ -54,7 +54,7 @@ pub struct Scene {
     #[serde(default, rename = "boundary")]
     pub boundaries: Vec<Boundary>,
     #[serde(default, rename = "inlet")]
-    pub inlets: Vec<Inlet>,
+    pub inlets: Vec<InletSettings>,
     /// Named `--set` combinations of this scene that reproduce other panels of a figure;
     /// `coil scenes` lists them with their commands.
     #[serde(default, rename = "variant")]
@@ -91,7 +91,7 @@ pub struct Material {
     pub pressure_gradient: PressureGradient,
     /// The kernel of the density sum, Eq. (5).
     #[serde(default)]
-    pub density_kernel: DensityKernel,
+    pub density_kernel: DensityKernelKind,
     /// Initial particle spacing (m).
     pub particle_spacing_m: f64,
     /// Support radius h as a multiple of the spacing (2 gives about 33 neighbors).
@@ -142,7 +142,7 @@ impl PressureGradient {
 /// The kernel of the density sum, Eq. (5).
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
-pub enum DensityKernel {
+pub enum DensityKernelKind {
     /// The paper's (Müller 2003's) poly6. Its gradient is not the spiky gradient of Eq. (7), so
     /// the pressure force does not follow the gradient of the density it comes from, and a
     /// lattice stiffened by a high c flutters where viscosity no longer damps the particle scale
@@ -240,7 +240,7 @@ pub enum Precision {
 
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct Simulation {
+pub struct SimulationSettings {
     /// Simulated time to run (s).
     pub end_time_s: f64,
     #[serde(default)]
@@ -432,7 +432,7 @@ pub enum Nozzle {
 /// layer has moved one layer spacing away, until the particle budget is reached.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct Inlet {
+pub struct InletSettings {
     pub nozzle: Nozzle,
     /// Nozzle centre at t = 0 (m).
     pub position_m: [f64; 3],

@@ -1,7 +1,7 @@
 //! Initial particles of a scene: fluid blocks and boundary walls on the particle lattice.
 
 use crate::scene::particle_limit::ParticleLimit;
-use crate::scene::{Boundary, DensityKernel, Scene, SceneError};
+use crate::scene::{Boundary, DensityKernelKind, Scene, SceneError};
 use crate::simulation::inlet::Inlet;
 use coil_kernels::smoothing::SmoothingKernels;
 use coil_kernels::{Real, Vec3};
@@ -262,7 +262,7 @@ fn overlap(boundary: &[[f64; 3]], fluid: &[[f64; 3]], s: f64) -> Option<[f64; 3]
 /// Particle mass (kg) that makes the density (Eq. (5) with `kernel`) of a full cubic lattice of
 /// spacing `s` equal rho0, so fluid at rest starts at zero pressure (m = rho0 s^3 would leave
 /// it a few percent off, since the lattice sum of W is not exactly 1/s^3).
-pub fn calibrated_mass(rest_density: f64, spacing: f64, support_radius: f64, kernel: DensityKernel) -> f64 {
+pub fn calibrated_mass(rest_density: f64, spacing: f64, support_radius: f64, kernel: DensityKernelKind) -> f64 {
     let kernels = SmoothingKernels::<f64>::new(support_radius);
     let n = (support_radius / spacing).ceil() as i64;
     let mut sum = 0.0;
@@ -271,8 +271,8 @@ pub fn calibrated_mass(rest_density: f64, spacing: f64, support_radius: f64, ker
             for i in -n..=n {
                 let r2 = ((i * i + j * j + k * k) as f64) * spacing * spacing;
                 sum += match kernel {
-                    DensityKernel::Poly6 => kernels.poly6(r2),
-                    DensityKernel::Spiky => kernels.spiky(r2),
+                    DensityKernelKind::Poly6 => kernels.poly6(r2),
+                    DensityKernelKind::Spiky => kernels.spiky(r2),
                 };
             }
         }
@@ -291,7 +291,7 @@ pub fn calibrated_kernels<R: Real>(
     rest_density: f64,
     spacing: f64,
     support_radius: f64,
-    kernel: DensityKernel,
+    kernel: DensityKernelKind,
 ) -> SmoothingKernels<R> {
     let raw = SmoothingKernels::<f64>::new(support_radius);
     let volume = calibrated_mass(rest_density, spacing, support_radius, kernel) / rest_density;

@@ -77,7 +77,7 @@ impl Inlet {
     /// `mass` (kg) and `rest_density` (kg/m^3) fix the layer distance that makes the mass flow
     /// rate equal rho0 A U for the nozzle's nominal area A. The tube is one support radius
     /// `support_radius` (m) long, so the first free layer below the exit has full support.
-    pub fn new(config: &scene::Inlet, spacing: f64, support_radius: f64, mass: f64, rest_density: f64) -> Self {
+    pub fn new(config: &scene::InletSettings, spacing: f64, support_radius: f64, mass: f64, rest_density: f64) -> Self {
         let direction = normalized(config.direction);
         let (e1, e2) = nozzle_axes(direction);
         let mut offsets = Vec::new();

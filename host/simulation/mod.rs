@@ -12,7 +12,7 @@ use crate::cpu::neighbor_grid::NeighborGrid;
 use crate::cpu::parallel::on_worker;
 use crate::cpu::CpuBackend;
 use crate::scene::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, InitialParticles};
-use crate::scene::{DensityKernel, Scene, ViscousVelocity, Walls};
+use crate::scene::{DensityKernelKind, Scene, ViscousVelocity, Walls};
 use crate::simulation::inlet::Inlet;
 use crate::simulation::model::{Model, ParticleState};
 use crate::simulation::particles::{HostParticles, Particles};
@@ -332,8 +332,8 @@ fn density<R: Real, M: Model<R>, T: Topology, N: Neighbors, P: Passes<R, T, N>>(
 ) {
     let args = DensityArgs { neighborhood: v.neighbors, fluid: run.fluid, density: v.density };
     match run.density_kernel {
-        DensityKernel::Poly6 => passes.density::<Poly6>(args),
-        DensityKernel::Spiky => passes.density::<Spiky>(args),
+        DensityKernelKind::Poly6 => passes.density::<Poly6>(args),
+        DensityKernelKind::Spiky => passes.density::<Spiky>(args),
     }
 }
 

@@ -2,7 +2,7 @@
 //! variant, the clock and time step, the inlets, the particle counts and the guard.
 
 use super::{Diagnostics, Instability};
-use crate::scene::{DensityKernel, ViscousVelocity};
+use crate::scene::{DensityKernelKind, ViscousVelocity};
 use crate::simulation::inlet::Inlet;
 use crate::simulation::model::Model;
 use crate::simulation::particles::Particles;
@@ -38,7 +38,7 @@ pub struct RunState<R: Real, M: Model<R>> {
     pub last_dt: f64,
     pub last_limit: Limit,
     /// The kernel of Eq. (5): which monomorphised density pass each step launches.
-    pub density_kernel: DensityKernel,
+    pub density_kernel: DensityKernelKind,
     /// Which velocity the viscous terms read.
     pub viscous_velocity: ViscousVelocity,
 }

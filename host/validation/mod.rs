@@ -10,7 +10,7 @@ pub mod taylor_green;
 pub mod torus;
 pub mod tradeoff;
 
-use crate::output::plot::{Axis, Chart, Line, Series, PALETTE};
+use crate::output::plot::{Axis, Chart, Curve, Line, PALETTE};
 use crate::scene::{PressureGradient, ViscosityOperator};
 use hydrostatic::Tank;
 use poiseuille::{cross_steady_velocity, relative_max_error, simulate, startup_velocity, Channel, CrossLaw};
@@ -97,14 +97,14 @@ fn profile_chart(title: String, gap: f64, scale: f64, samples: &[ProfileSample])
     for (k, (label, simulated, reference)) in samples.iter().enumerate() {
         let c = PALETTE[k % PALETTE.len()];
         let norm = |p: &[f64; 2]| [p[0] / gap, p[1] / scale];
-        series.push(Series {
+        series.push(Curve {
             label: format!("{label} ref"),
             color: c,
             points: reference.iter().map(norm).collect(),
             line: Line::Solid,
             marker: 0.0,
         });
-        series.push(Series {
+        series.push(Curve {
             label: format!("{label} sph"),
             color: c,
             points: simulated.iter().map(norm).collect(),
@@ -242,14 +242,14 @@ pub fn hydrostatic_tank(layers: usize, out: Option<&Path>) -> Result<Vec<CaseRes
                 x: Axis::linear("depth / D"),
                 y: Axis::linear("p / (rho0 g D)"),
                 series: vec![
-                    Series {
+                    Curve {
                         label: "rho0 g depth".into(),
                         color: PALETTE[0],
                         points: vec![[0.0, 0.0], [1.0, 1.0]],
                         line: Line::Solid,
                         marker: 0.0,
                     },
-                    Series { label: "sph".into(), color: PALETTE[1], points: points.collect(), line: Line::None, marker: 2.0 },
+                    Curve { label: "sph".into(), color: PALETTE[1], points: points.collect(), line: Line::None, marker: 2.0 },
                 ],
             };
             save_plot(&chart, &dir.join(format!("hydrostatic_{layers}.png")))
@@ -305,14 +305,14 @@ pub fn taylor_green(
                 x: Axis::linear("8 pi^2 nu t / L^2"),
                 y: Axis::log("amplitude / U"),
                 series: vec![
-                    Series {
+                    Curve {
                         label: "exp(-8 pi^2 nu t / L^2)".into(),
                         color: PALETTE[0],
                         points: reference,
                         line: Line::Solid,
                         marker: 0.0,
                     },
-                    Series { label: "sph".into(), color: PALETTE[1], points: simulated, line: Line::None, marker: 3.0 },
+                    Curve { label: "sph".into(), color: PALETTE[1], points: simulated, line: Line::None, marker: 3.0 },
                 ],
             };
             let name = format!("taylor_green_{}_{across}.png", operator_file_word(op, hourglass_control));
@@ -358,14 +358,14 @@ pub fn huppert_spreading(
                 x: Axis::log("t (s)"),
                 y: Axis::log("r_N / R0"),
                 series: vec![
-                    Series {
+                    Curve {
                         label: "0.894 (g V^3 t / 3 nu)^(1/8)".into(),
                         color: PALETTE[0],
                         points: reference,
                         line: Line::Solid,
                         marker: 0.0,
                     },
-                    Series { label: "sph".into(), color: PALETTE[1], points: simulated, line: Line::None, marker: 3.0 },
+                    Curve { label: "sph".into(), color: PALETTE[1], points: simulated, line: Line::None, marker: 3.0 },
                 ],
             };
             save_plot(&chart, &dir.join(format!("huppert_{}_{across}.png", operator_file_word(op, hourglass_control))))
@@ -462,14 +462,14 @@ pub fn jet_buckling(
                 x: Axis::linear("t (s)"),
                 y: Axis::linear("axis offset / D"),
                 series: vec![
-                    Series {
+                    Curve {
                         label: format!("threshold {tolerance} D"),
                         color: PALETTE[0],
                         points: vec![[0.0, tolerance], [end_time_s, tolerance]],
                         line: Line::Solid,
                         marker: 0.0,
                     },
-                    Series { label: "sph".into(), color: PALETTE[1], points: offsets, line: Line::Solid, marker: 3.0 },
+                    Curve { label: "sph".into(), color: PALETTE[1], points: offsets, line: Line::Solid, marker: 3.0 },
                 ],
             };
             let word = operator_file_word(op, hourglass_control);

@@ -5,7 +5,7 @@
 
 use super::scene_word;
 use super::snapshot::snapshots;
-use crate::scene::{DensityKernel, Precision, Scene, ViscosityOperator, ViscousVelocity, Walls};
+use crate::scene::{DensityKernelKind, Precision, Scene, ViscosityOperator, ViscousVelocity, Walls};
 use std::f64::consts::PI;
 
 /// Morris et al. 1997's channel: L = 1 mm, nu = 1e-6 m^2/s, F = 2e-4 m/s^2, rho0 = 1000
@@ -29,7 +29,7 @@ pub struct Channel {
     /// Multiplies the automatic dt; above 1 the scene overrides the Eq. (10) bound.
     pub safety_factor: f64,
     /// W of Eq. (5).
-    pub density_kernel: DensityKernel,
+    pub density_kernel: DensityKernelKind,
     /// Weight of the hourglass control of the paper's operator (0: none).
     pub hourglass_control: f64,
     /// Which velocity the viscous terms read.
@@ -66,7 +66,7 @@ impl Channel {
             // Mach 0.01 at u_max = 2.5e-5 m/s; dt stays set by the viscous term of Eq. (10).
             sound_speed_m_s: 2.5e-3,
             safety_factor: 1.0,
-            density_kernel: DensityKernel::Poly6,
+            density_kernel: DensityKernelKind::Poly6,
             hourglass_control: 0.0,
             viscous_velocity: ViscousVelocity::FullStep,
         }

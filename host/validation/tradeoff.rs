@@ -6,8 +6,8 @@
 
 use super::poiseuille::{Channel, CrossLaw};
 use super::{cross_poiseuille_in, operator_label, startup_poiseuille_in, HOURGLASS_CONTROL};
-use crate::output::plot::{Axis, Chart, Line, Series, PALETTE};
-use crate::scene::{DensityKernel, Precision, ViscosityOperator, ViscousVelocity, Walls};
+use crate::output::plot::{Axis, Chart, Curve, Line, PALETTE};
+use crate::scene::{DensityKernelKind, Precision, ViscosityOperator, ViscousVelocity, Walls};
 use crate::statistics::Sorted;
 use std::time::Instant;
 
@@ -108,7 +108,7 @@ pub fn trials(quick: bool) -> Vec<Trial> {
         let c = base.newtonian_peak() / mach;
         add("start-up", "sound speed", format!("c = {c:.1e} m/s (Mach {mach})"), Channel { sound_speed_m_s: c, ..base });
     }
-    let spiky = Channel { density_kernel: DensityKernel::Spiky, ..base };
+    let spiky = Channel { density_kernel: DensityKernelKind::Spiky, ..base };
     add("start-up", "density kernel", "spiky".into(), spiky);
     if !quick {
         let c = base.newtonian_peak() / 1e-4;
@@ -323,7 +323,7 @@ pub fn chart(m: &[Measured]) -> Chart {
             continue;
         }
         let color = PALETTE[k];
-        series.push(Series {
+        series.push(Curve {
             label: format!("{case} trials"),
             color,
             points: of_case.iter().filter_map(|x| Some([x.wall_s, x.error?])).collect(),
@@ -332,7 +332,7 @@ pub fn chart(m: &[Measured]) -> Chart {
         });
         let mut front: Vec<[f64; 2]> = of_case.iter().filter(|x| x.pareto).filter_map(|x| Some([x.wall_s, x.error?])).collect();
         front.sort_by(|a, b| a[0].total_cmp(&b[0]));
-        series.push(Series { label: format!("{case} Pareto front"), color, points: front, line: Line::Solid, marker: 5.0 });
+        series.push(Curve { label: format!("{case} Pareto front"), color, points: front, line: Line::Solid, marker: 5.0 });
     }
     Chart { title: "error against wall time".into(), x: Axis::log("wall s"), y: Axis::log("L-inf error / peak"), series }
 }
