@@ -143,11 +143,6 @@ impl std::fmt::Write for Text<'_> {
     }
 }
 
-/// The `.pvd` series of a run of scene `scene_name` in output folder `dir`.
-pub fn series_path(dir: &Path, scene_name: &str) -> PathBuf {
-    dir.join(format!("{scene_name}.pvd"))
-}
-
 /// A `.pvd` collection listing every frame written so far.
 pub struct PvdSeries {
     path: PathBuf,

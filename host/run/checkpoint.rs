@@ -13,7 +13,7 @@
 //! fingerprint, the fields in the order `write` gives them, and an FNV-1a checksum of all the
 //! bytes before it, so a damaged file is refused rather than misread.
 
-use crate::run::Tally;
+use super::summary::Tally;
 use crate::scene::Scene;
 use crate::simulation::model::Model;
 use crate::simulation::particles::Particles;
@@ -21,9 +21,6 @@ use crate::simulation::time_step::Limit;
 use crate::simulation::{Diagnostics, RunState, Setup};
 use coil_kernels::Real;
 use std::path::Path;
-
-/// The checkpoint's file name in the output folder.
-pub const FILE_NAME: &str = "checkpoint.bin";
 
 const MAGIC: &[u8; 8] = b"COILCKPT";
 const FORMAT_VERSION: u32 = 1;
@@ -227,7 +224,7 @@ pub fn write<R: Real, M: Model<R>>(
     scene: &Scene,
     tally: &Tally,
 ) -> std::io::Result<()> {
-    crate::output::write_atomically(&dir.join(FILE_NAME), &encode(sim, p, scene, tally))
+    crate::output::write_atomically(&dir.join(super::folder::CHECKPOINT), &encode(sim, p, scene, tally))
 }
 
 impl Checkpoint {

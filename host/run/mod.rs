@@ -2,13 +2,15 @@
 //! as it goes.
 
 pub mod checkpoint;
+pub mod folder;
 pub mod interrupt;
 pub mod run_log;
+pub mod summary;
 
 use crate::cpu::parallel::on_worker;
 use crate::output::frame::Frame;
 use crate::output::preview::{own_range, render, speeds, Coloring, View};
-use crate::output::vtu::{encode, series_path, Field, PvdSeries};
+use crate::output::vtu::{encode, Field, PvdSeries};
 use crate::output::write_atomically;
 use crate::run::run_log::{resolved, Resumed, RunLog};
 use crate::scene::setup::{initial_particles, InitialParticles};
@@ -19,12 +21,14 @@ use crate::simulation::particles::HostParticles;
 use crate::simulation::{Instability, RunState, Setup, Simulation, StepError};
 use checkpoint::Checkpoint;
 use coil_kernels::Real;
+use folder::{frame_name, series_path};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
+pub use summary::{Summary, Tally};
 
 /// Pixels per panel of `--preview` pictures.
 const PREVIEW_SIZE: usize = 480;
@@ -97,51 +101,6 @@ pub struct RunOptions {
     /// Once set (by Ctrl-C through `interrupt::watch`, or by a program driving the run), the run
     /// stops after its step, checkpointed for `coil resume`.
     pub stop: Option<&'static AtomicBool>,
-}
-
-/// What a run did, printed at its end.
-#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
-pub struct Summary {
-    pub steps: u64,
-    pub simulated_s: f64,
-    pub wall_s: f64,
-    pub particle_steps_per_s: f64,
-    pub fluid_particles: usize,
-    pub boundary_particles: usize,
-    /// Largest compression (rho - rho0) / rho0 over the fluid and the steps checked.
-    pub max_compression: f64,
-    pub max_speed_m_s: f64,
-    /// Largest speed over c.
-    pub max_mach: f64,
-    pub removed: u64,
-    pub frames: usize,
-    /// When (s) the fluid capacity (`simulation.max_fluid_particles`) stopped the inlets, and
-    /// that capacity.
-    pub capacity_reached: Option<(f64, usize)>,
-    /// The `.pvd` series that ParaView opens, where the run writes `.vtu` frames.
-    #[serde(skip)]
-    pub series: Option<PathBuf>,
-}
-
-impl fmt::Display for Summary {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "steps                  {}", self.steps)?;
-        writeln!(f, "simulated time         {:.6} s", self.simulated_s)?;
-        writeln!(f, "wall time              {:.2} s", self.wall_s)?;
-        writeln!(f, "particle-steps/s       {:.3e}", self.particle_steps_per_s)?;
-        writeln!(f, "particles              {} fluid, {} boundary", self.fluid_particles, self.boundary_particles)?;
-        writeln!(f, "max compression        {:.3e} ((rho-rho0)/rho0)", self.max_compression)?;
-        writeln!(f, "max speed              {:.4} m/s (Mach {:.3})", self.max_speed_m_s, self.max_mach)?;
-        writeln!(f, "removed (left domain)  {}", self.removed)?;
-        write!(f, "frames                 {}", self.frames)?;
-        if let Some((t, capacity)) = self.capacity_reached {
-            write!(
-                f,
-                "\ninlets stopped         at t = {t:.4} s: the fluid capacity of {capacity} particles (simulation.max_fluid_particles) was full"
-            )?;
-        }
-        Ok(())
-    }
 }
 
 #[derive(Debug)]
@@ -238,7 +197,7 @@ fn execute(
         summary: None,
         scene: resolved(scene),
     };
-    let log_path = options.out_dir.join("run.json");
+    let log_path = options.out_dir.join(folder::LOG);
     log.write(&options.out_dir).map_err(|e| io_error("run log", &log_path, e))?;
     let checkpoint = resumption.as_ref().map(|r| &r.checkpoint);
     let result = with_precision_and_model(precision, scene, Drive { scene, initial: &initial, options, device, checkpoint });
@@ -275,7 +234,7 @@ pub fn resume(dir: &Path, options: &ResumeOptions) -> Result<Summary, RunError> 
 
 /// [`resume`] on a device already opened, or on the CPU for `None`.
 pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) -> Result<Summary, RunError> {
-    let log_path = dir.join("run.json");
+    let log_path = dir.join(folder::LOG);
     let bad = |file: &Path, field: &str, reason: String| {
         RunError::Scene(SceneError { file: file.display().to_string(), field: field.into(), reason })
     };
@@ -301,7 +260,7 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
         overrides.push(crate::scene::overrides::Override::parse(given).map_err(RunError::Scene)?);
     }
     let scene = Scene::load_with(&log_path, &overrides).map_err(RunError::Scene)?;
-    let checkpoint_path = dir.join(checkpoint::FILE_NAME);
+    let checkpoint_path = dir.join(folder::CHECKPOINT);
     let mut checkpoint = Checkpoint::read(&checkpoint_path).map_err(|e| bad(&checkpoint_path, "(file)", e))?;
     if checkpoint.fingerprint != checkpoint::fingerprint(&scene) {
         return Err(bad(
@@ -345,7 +304,7 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
 /// was then killed, they will be written again, and must not linger if the resumed run stops
 /// before them.
 fn remove_frames_from(dir: &Path, first: usize) -> Result<(), RunError> {
-    let files = crate::output::earlier_run_files(dir).map_err(|e| io_error("output folder", dir, e))?;
+    let files = folder::earlier_run_files(dir).map_err(|e| io_error("output folder", dir, e))?;
     for file in files {
         let name = file.file_name().and_then(|n| n.to_str()).unwrap_or_default();
         let number = name.strip_prefix("frame_").and_then(|rest| rest.get(..6)).and_then(|n| n.parse::<usize>().ok());
@@ -361,7 +320,7 @@ fn remove_frames_from(dir: &Path, first: usize) -> Result<(), RunError> {
 /// run's files first.
 fn clear_earlier_run(scene_file: &str, options: &RunOptions) -> Result<(), RunError> {
     let dir = &options.out_dir;
-    let earlier = crate::output::earlier_run_files(dir).map_err(|e| io_error("output folder", dir, e))?;
+    let earlier = folder::earlier_run_files(dir).map_err(|e| io_error("output folder", dir, e))?;
     if earlier.is_empty() {
         return Ok(());
     }
@@ -405,7 +364,7 @@ impl WithModel for Drive<'_> {
             Some(c) => {
                 c.restore(&mut setup).map_err(|reason| {
                     RunError::Scene(SceneError {
-                        file: self.options.out_dir.join(checkpoint::FILE_NAME).display().to_string(),
+                        file: self.options.out_dir.join(folder::CHECKPOINT).display().to_string(),
                         field: "(file)".into(),
                         reason,
                     })
@@ -506,44 +465,6 @@ fn io_error(what: &str, path: &std::path::Path, e: std::io::Error) -> RunError {
     RunError::Io(format!("cannot write {what} {}: {e}", path.display()))
 }
 
-/// The running figures of a run's time loop that its summary and frame schedule need; kept in
-/// checkpoints, so that a resumed run carries them on.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Tally {
-    /// Simulated time (s) of each frame written, in order.
-    pub frame_times: Vec<f64>,
-    /// When the next frame is due (s), with `output.every_s`.
-    pub next_frame_time: f64,
-    /// Particles moved, summed over steps.
-    pub particle_steps: f64,
-    pub max_compression: f64,
-    /// Largest fluid speed over all steps (m/s).
-    pub max_speed: f64,
-    /// Wall time the run has taken (s): before this process, then up to the last checkpoint.
-    pub wall_s: f64,
-}
-
-impl Tally {
-    /// Puts the next frame `every_s` after the last one written, or at the first such time after
-    /// `now` (s), for a run resumed with another `output.every_s`: the schedule it was stopped on
-    /// would write its next frame at the old interval.
-    pub fn reschedule(&mut self, every_s: Option<f64>, now: f64) {
-        let Some(every) = every_s else {
-            self.next_frame_time = f64::INFINITY;
-            return;
-        };
-        self.next_frame_time = self.frame_times.last().copied().unwrap_or(0.0) + every;
-        self.schedule_past(now, every_s);
-    }
-
-    /// Moves the next frame past `now` (s) in steps of `every_s`.
-    fn schedule_past(&mut self, now: f64, every_s: Option<f64>) {
-        while self.next_frame_time <= now * (1.0 + 1e-9) {
-            self.next_frame_time += every_s.unwrap_or(f64::INFINITY);
-        }
-    }
-}
-
 fn drive<R: Real, M: Model<R>, B: StepBackend<R>>(
     mut sim: Simulation<R, M, B>,
     scene: &Scene,
@@ -554,14 +475,13 @@ fn drive<R: Real, M: Model<R>, B: StepBackend<R>>(
     let dir = &options.out_dir;
 
     let mut bytes = Vec::new();
-    let boundary_path = dir.join("boundary.vtu");
+    let boundary_path = dir.join(folder::BOUNDARY);
     encode(&initial.boundary, &[] as &[Field], scene.output.vtu_encoding, &mut bytes);
     write_atomically(&boundary_path, &bytes).map_err(|e| io_error("boundary", &boundary_path, e))?;
 
     let end = scene.simulation.end_time_s;
     let every_s = scene.output.every_s;
     let every_steps = scene.output.every_steps;
-    let frame_name = |k: usize| format!("frame_{k:06}.vtu");
     let fresh = resumed.is_none();
     let mut tally = resumed.unwrap_or(Tally { next_frame_time: every_s.unwrap_or(f64::INFINITY), ..Tally::default() });
     let earlier_wall_s = tally.wall_s;
@@ -605,7 +525,7 @@ fn drive<R: Real, M: Model<R>, B: StepBackend<R>>(
     };
     let save_checkpoint = |run: &RunState<R, M>, host: &HostParticles<R>, tally: &mut Tally| -> Result<(), RunError> {
         tally.wall_s = earlier_wall_s + started.elapsed().as_secs_f64();
-        let path = dir.join(checkpoint::FILE_NAME);
+        let path = dir.join(folder::CHECKPOINT);
         checkpoint::write(dir, run, &host.particles, scene, tally).map_err(|e| io_error("checkpoint", &path, e))
     };
     if fresh {

@@ -2,8 +2,8 @@
 //! Written when the run starts (status "running") and again when it ends, through a temporary
 //! name and a rename, so a killed run still leaves a readable log.
 
+use super::summary::Summary;
 use crate::output::write_atomically;
-use crate::run::Summary;
 use crate::scene::{Precision, Scene};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -48,6 +48,6 @@ pub struct RunLog<'a> {
 impl RunLog<'_> {
     pub fn write(&self, dir: &Path) -> std::io::Result<()> {
         let json = serde_json::to_vec_pretty(self).map_err(std::io::Error::other)?;
-        write_atomically(&dir.join("run.json"), &json)
+        write_atomically(&dir.join(super::folder::LOG), &json)
     }
 }

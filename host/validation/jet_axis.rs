@@ -4,8 +4,8 @@
 //! in the frames of any finished run, so that a jet run with other parameters is judged the same
 //! way.
 
-use crate::output::vtu::series_path;
 use crate::output::vtu_read::{read_frame, read_series};
+use crate::run::folder::{series_path, LOG};
 use crate::scene::{Boundary, FrameFormat, Nozzle, Scene, SceneError};
 use std::path::Path;
 
@@ -97,7 +97,7 @@ pub struct AxisSample {
 /// The axis of the run in output folder `dir` and its offset at each `.vtu` frame. The scene is
 /// the one the run logged in `run.json`, the times those of its `.pvd` series.
 pub fn offsets_in_run(dir: &Path) -> Result<(JetAxis, Vec<AxisSample>), String> {
-    let log = dir.join("run.json");
+    let log = dir.join(LOG);
     let scene = Scene::load_with(&log, &[]).map_err(|e| e.to_string())?;
     let axis = JetAxis::of(&scene, &log.display().to_string()).map_err(|e| e.to_string())?;
     if !scene.output.formats.contains(&FrameFormat::Vtu) {

@@ -73,7 +73,7 @@ impl<R: Real> ParticleViscosity<R> for View<'_, R> {
 /// symmetric in i and j, so pair forces cancel and every pair takes kinetic energy out, at
 /// m^2 w_ij F |v_i - v_j|^2, whatever the densities: at a free surface, whose densities fall
 /// short of rho0, (nu_i + nu_j) / (2 rho_j) would do neither. With nu from
-/// [`crate::shear_viscosity`] it carries the Cross model: it discretises div(nu grad v), which
+/// [`shear_viscosity_pass`] it carries the Cross model: it discretises div(nu grad v), which
 /// is (1/rho) div tau wherever nu varies only across the streamlines (every channel flow) and
 /// leaves out grad nu · grad v^T elsewhere. Unlike Eq. (8) then (9) it has no odd-even null
 /// mode, and unlike Müller's kernel it keeps its lattice calibration as layers slide past each

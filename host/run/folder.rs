@@ -1,0 +1,44 @@
+//! The files a run writes into its output folder, named here and nowhere else.
+
+use std::io;
+use std::path::{Path, PathBuf};
+
+/// The run log (`run::run_log`).
+pub const LOG: &str = "run.json";
+/// The checkpoint (`run::checkpoint`).
+pub const CHECKPOINT: &str = "checkpoint.bin";
+/// The wall particles, written once.
+pub const BOUNDARY: &str = "boundary.vtu";
+
+/// Frame `k`'s `.vtu` file name; its other formats take the same stem.
+pub fn frame_name(k: usize) -> String {
+    format!("frame_{k:06}.vtu")
+}
+
+/// The `.pvd` series of a run of scene `scene_name` in output folder `dir`.
+pub fn series_path(dir: &Path, scene_name: &str) -> PathBuf {
+    dir.join(format!("{scene_name}.pvd"))
+}
+
+/// The files a run writes into its output folder that `dir` already holds: its log, the
+/// boundary, the series, its checkpoint, and every frame in each format, with any temporary
+/// left by a killed run. Other files are the user's and are never listed.
+pub fn earlier_run_files(dir: &Path) -> io::Result<Vec<PathBuf>> {
+    if !dir.is_dir() {
+        return Ok(Vec::new());
+    }
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir)? {
+        let path = entry?.path();
+        let Some(name) = path.file_name().and_then(|n| n.to_str()) else { continue };
+        let name = name.strip_suffix(".tmp").unwrap_or(name);
+        let frame = name.strip_prefix("frame_").and_then(|rest| rest.split_once('.')).is_some_and(|(number, ext)| {
+            number.len() == 6 && number.bytes().all(|b| b.is_ascii_digit()) && ["vtu", "ply", "xyz", "png"].contains(&ext)
+        });
+        if path.is_file() && (frame || [LOG, BOUNDARY, CHECKPOINT].contains(&name) || name.ends_with(".pvd")) {
+            files.push(path);
+        }
+    }
+    files.sort();
+    Ok(files)
+}
