@@ -11,9 +11,20 @@ use core::marker::PhantomData;
 #[inline(always)]
 fn check_index(i: usize, len: usize) {
     #[cfg(not(target_arch = "nvptx64"))]
-    assert!(i < len, "index {i} past a view of {len} elements");
+    if i >= len {
+        out_of_bounds(i, len);
+    }
     #[cfg(target_arch = "nvptx64")]
     let _ = (i, len);
+}
+
+/// The panic of [`check_index`], kept out of line so that the check costs the reading loop one
+/// compare and a branch never taken.
+#[cfg(not(target_arch = "nvptx64"))]
+#[cold]
+#[inline(never)]
+fn out_of_bounds(i: usize, len: usize) -> ! {
+    panic!("index {i} past a view of {len} elements")
 }
 
 /// A read-only view of `len` elements.
