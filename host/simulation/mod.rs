@@ -285,10 +285,12 @@ impl<R: Real, M: Model<R>, B: Backend<R>> Simulation<R, M, B> {
         Ok(self.run.check()?)
     }
 
-    /// Reads the diagnostics and brings the host's particles up to date (before frames, at the
-    /// end); stops an unstable run.
+    /// Reads the diagnostics where the last step did not, and brings the host's particles up to
+    /// date (before frames, at the end); stops an unstable run.
     pub fn sync(&mut self) -> Result<(), StepError<B::Fault>> {
-        self.read_diagnostics()?;
+        if !self.settled() {
+            self.read_diagnostics()?;
+        }
         self.backend.download().map_err(StepError::Backend)
     }
 
