@@ -167,7 +167,7 @@ enum Command {
         /// Run only these groups of cases (comma-separated): poiseuille, cross, tank,
         /// taylor-green, torus, huppert, jet (not with --quick).
         #[arg(long, value_delimiter = ',')]
-        only: Vec<ValidationGroup>,
+        only: Vec<coil::validation::suite::Group>,
         /// Output folder for plots and validate.md.
         #[arg(long, default_value = "out/validate")]
         out: PathBuf,
@@ -295,7 +295,7 @@ fn command(command: Command) -> Result<ExitCode, String> {
         }
         Command::Tradeoff { quick, repeats, out } => tradeoff_command(quick, repeats as usize, &out).map(|()| ExitCode::SUCCESS),
         Command::Validate { quick, only, out } => {
-            Ok(if validate_command(quick, &only, &out)? { ExitCode::SUCCESS } else { ExitCode::from(1) })
+            Ok(if coil::validation::suite::run(quick, &only, &out)? { ExitCode::SUCCESS } else { ExitCode::from(1) })
         }
         Command::Bench { sizes, precision, backend, steps, cpu_large_steps, warmup, profile_steps, threads, out } => {
             set_threads(threads)?;
@@ -505,166 +505,6 @@ fn tradeoff_command(quick: bool, repeats: usize, out: &Path) -> Result<(), Strin
     }
 }
 
-/// A group of `coil validate`'s cases.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-enum ValidationGroup {
-    /// Start-up Poiseuille flow (Morris et al. 1997), each operator.
-    Poiseuille,
-    /// Steady Poiseuille flow of Cross fluids.
-    Cross,
-    /// The hydrostatic tank.
-    Tank,
-    /// The Taylor-Green vortex, each operator.
-    TaylorGreen,
-    /// The spreading torus of Fig. 3, ordered by K.
-    Torus,
-    /// Huppert's viscous spreading of a released cylinder, each operator.
-    Huppert,
-    /// Jet buckling (Fig. 5, 6) at H/D = 12 and 3; minutes per run, so not in --quick.
-    Jet,
-}
-
-/// `coil validate`: runs the cases (those of `only`, or all), prints and writes the table; true
-/// when all pass.
-fn validate_command(quick: bool, only: &[ValidationGroup], out: &Path) -> Result<bool, String> {
-    use coil::scene::ViscosityOperator;
-    use coil::validation::poiseuille::{Channel, CrossLaw};
-    use coil::validation::{
-        cross_poiseuille, cross_poiseuille_in, huppert_spreading, hydrostatic_tank, jet_buckling, startup_poiseuille,
-        startup_poiseuille_in, taylor_green, torus_ordering, CaseResult, HOURGLASS_CONTROL,
-    };
-    std::fs::create_dir_all(out).map_err(|e| format!("--out: {} cannot be created: {e}", out.display()))?;
-    let resolutions: &[usize] = if quick { &[10, 20] } else { &[10, 20, 30] };
-    let cross_across = if quick { 10 } else { 20 };
-    type Case<'a> = Box<dyn Fn() -> Result<Vec<CaseResult>, String> + 'a>;
-    // Whether a case's tolerance decides the verdict. The validation holds the paper's operator to
-    // its tolerance at 30 across (40 for the vortex); coarser runs show its convergence, and
-    // its Cross cases, which its odd-even mode keeps above 3 %, are there for comparison.
-    // Under hourglass control, which removes that mode, it is held to every tolerance but
-    // Huppert's; its Cross cases from 20 across (K = 100 s, n = 0.5 measured 0.031 at 10).
-    let mut cases: Vec<(ValidationGroup, bool, Case)> = Vec::new();
-    let paper = |op| op == ViscosityOperator::Stress;
-    // Each operator, and the paper's with its hourglass control.
-    let operators = [
-        (ViscosityOperator::Stress, 0.0),
-        (ViscosityOperator::Stress, HOURGLASS_CONTROL),
-        (ViscosityOperator::Laplacian, 0.0),
-        (ViscosityOperator::Morris, 0.0),
-    ];
-    for &op in &[ViscosityOperator::Stress, ViscosityOperator::Laplacian, ViscosityOperator::Morris] {
-        for &across in resolutions {
-            cases.push((
-                ValidationGroup::Poiseuille,
-                !paper(op) || across >= 30,
-                Box::new(move || startup_poiseuille(across, op, Some(out)).map(|r| vec![r])),
-            ));
-        }
-    }
-    let controlled =
-        |across| Channel { hourglass_control: HOURGLASS_CONTROL, ..Channel::morris(across, ViscosityOperator::Stress) };
-    for &across in resolutions {
-        cases.push((
-            ValidationGroup::Poiseuille,
-            true,
-            Box::new(move || startup_poiseuille_in(&controlled(across), Some(out)).map(|r| vec![r])),
-        ));
-    }
-    for &op in &[ViscosityOperator::Stress, ViscosityOperator::Morris] {
-        for (k, n) in [(10.0, 1.0), (10.0, 0.5), (100.0, 0.5)] {
-            cases.push((
-                ValidationGroup::Cross,
-                !paper(op),
-                Box::new(move || cross_poiseuille(cross_across, op, k, n, Some(out)).map(|r| vec![r])),
-            ));
-        }
-    }
-    for (k, n) in [(10.0, 1.0), (10.0, 0.5), (100.0, 0.5)] {
-        let law = CrossLaw { nu_inf_m2_s: 0.25e-6, k_s: k, n };
-        cases.push((
-            ValidationGroup::Cross,
-            cross_across >= 20,
-            Box::new(move || {
-                cross_poiseuille_in(&Channel { cross: Some(law), ..controlled(cross_across) }, Some(out)).map(|r| vec![r])
-            }),
-        ));
-    }
-    let tank_layers = if quick { 10 } else { 20 };
-    cases.push((ValidationGroup::Tank, true, Box::new(move || hydrostatic_tank(tank_layers, Some(out)))));
-    let vortex_across = if quick { 20 } else { 40 };
-    for (op, hg) in operators {
-        cases.push((
-            ValidationGroup::TaylorGreen,
-            !paper(op) || hg > 0.0 || vortex_across >= 40,
-            Box::new(move || taylor_green(vortex_across, op, hg, Some(out)).map(|r| vec![r])),
-        ));
-    }
-    let torus_spacing = if quick { 0.04 } else { 0.03 };
-    cases.push((ValidationGroup::Torus, true, Box::new(move || torus_ordering(torus_spacing, 0.3).map(|r| vec![r]))));
-    // The paper's operator is shown for comparison: it approaches the law too slowly to meet
-    // the exponent's 10 % at 8 and 10 across, with or without hourglass control (docs/validation.md).
-    let release_across = if quick { 8 } else { 10 };
-    for (op, hg) in operators {
-        cases.push((
-            ValidationGroup::Huppert,
-            !paper(op),
-            Box::new(move || huppert_spreading(release_across, op, hg, Some(out))),
-        ));
-    }
-    if !quick {
-        // Fig. 6: the paper's operator buckles where Müller's Laplacian and Morris's, at the
-        // same parameters and from both heights, are measured for comparison, as is the
-        // paper's under hourglass control.
-        let jets = [(12.0, ViscosityOperator::Stress, 0.0, true, true), (3.0, ViscosityOperator::Stress, 0.0, false, true)];
-        let fig6 = [
-            (ViscosityOperator::Stress, HOURGLASS_CONTROL),
-            (ViscosityOperator::Laplacian, 0.0),
-            (ViscosityOperator::Morris, 0.0),
-        ]
-        .into_iter()
-        .flat_map(|(op, hg)| [(12.0, op, hg, true, false), (3.0, op, hg, false, false)]);
-        for (height_over_d, op, hg, buckles, binding) in jets.into_iter().chain(fig6) {
-            cases.push((
-                ValidationGroup::Jet,
-                binding,
-                Box::new(move || jet_buckling(height_over_d, op, hg, buckles, 0.8, Some(out)).map(|r| vec![r])),
-            ));
-        }
-    }
-    cases.retain(|(group, _, _)| only.is_empty() || only.contains(group));
-    let mut table = String::from("| case | error | tolerance | result | wall s | measured as |\n|---|---:|---:|---|---:|---|\n");
-    let mut all = true;
-    for (group, binding, case) in cases {
-        let results = match case() {
-            Ok(results) => results,
-            // A run that goes unstable is a result, not the end of the report.
-            Err(why) => {
-                let verdict = if binding { "FAIL" } else { "not met (shown for comparison)" };
-                all &= !binding;
-                println!("{group:?}: {verdict}: {why}");
-                table += &format!("| {group:?} | – | – | {verdict} | – | {} |\n", why.replace('|', "/"));
-                continue;
-            }
-        };
-        for r in results {
-            let verdict = match (r.passed(), binding) {
-                (true, _) => "pass",
-                (false, true) => "FAIL",
-                (false, false) => "not met (shown for comparison)",
-            };
-            all &= r.passed() || !binding;
-            println!("{:<70} error {:>7.4}  tolerance {:.4}  {verdict}  ({:.0} s)", r.case, r.error, r.tolerance, r.wall_s);
-            table +=
-                &format!("| {} | {:.4} | {:.4} | {verdict} | {:.0} | {} |\n", r.case, r.error, r.tolerance, r.wall_s, r.measure);
-        }
-    }
-    let path = out.join("validate.md");
-    write_atomically(&path, format!("# coil validate\n\n{table}").as_bytes())
-        .map_err(|e| format!("{}: cannot be written: {e}", path.display()))?;
-    println!("table and plots in {}", out.display());
-    Ok(all)
-}
-
-/// `coil scenes`: every scene file in `dir` with its name and description.
 fn list_scenes(dir: &Path) -> Result<ExitCode, String> {
     let entries = std::fs::read_dir(dir).map_err(|e| {
         format!("{}: cannot be read: {e} (run from the repository root, or give the scenes folder)", dir.display())

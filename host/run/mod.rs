@@ -3,35 +3,24 @@
 
 pub mod checkpoint;
 pub mod folder;
+mod frames;
 pub mod interrupt;
+mod progress;
 pub mod run_log;
 pub mod summary;
+mod time_loop;
 
-use crate::cpu::parallel::on_worker;
-use crate::output::frame::Frame;
-use crate::output::preview::{own_range, render, speeds, Coloring, View};
-use crate::output::vtu::{encode, Field, PvdSeries};
-use crate::output::write_atomically;
 use crate::run::run_log::{resolved, Resumed, RunLog};
-use crate::scene::setup::{initial_particles, InitialParticles};
-use crate::scene::{FrameFormat, Precision, Scene, SceneError};
-use crate::simulation::backend::Backend as StepBackend;
-use crate::simulation::model::{with_precision_and_model, Model, WithModel};
-use crate::simulation::particles::HostParticles;
-use crate::simulation::{Instability, RunState, Setup, Simulation, StepError};
+use crate::scene::setup::initial_particles;
+use crate::scene::{Precision, Scene, SceneError};
+use crate::simulation::model::with_precision_and_model;
+use crate::simulation::Instability;
 use checkpoint::Checkpoint;
-use coil_kernels::Real;
-use folder::{frame_name, series_path};
-use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt;
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+use std::sync::atomic::AtomicBool;
 pub use summary::{Summary, Tally};
-
-/// Pixels per panel of `--preview` pictures.
-const PREVIEW_SIZE: usize = 480;
+use time_loop::Drive;
 
 /// Where the physics runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -345,258 +334,6 @@ fn clear_earlier_run(scene_file: &str, options: &RunOptions) -> Result<(), RunEr
     Ok(())
 }
 
-/// The time loop of a run, for whichever physics variant the scene picks.
-struct Drive<'a> {
-    scene: &'a Scene,
-    initial: &'a InitialParticles,
-    options: &'a RunOptions,
-    device: Option<Device>,
-    /// Where a resumed run starts.
-    checkpoint: Option<&'a Checkpoint>,
-}
-
-impl WithModel for Drive<'_> {
-    type Output = Result<Summary, RunError>;
-    fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
-        let mut setup = Setup::<R, M>::new(self.scene, self.initial, model);
-        let tally = match self.checkpoint {
-            None => None,
-            Some(c) => {
-                c.restore(&mut setup).map_err(|reason| {
-                    RunError::Scene(SceneError {
-                        file: self.options.out_dir.join(folder::CHECKPOINT).display().to_string(),
-                        field: "(file)".into(),
-                        reason,
-                    })
-                })?;
-                Some(c.tally.clone())
-            }
-        };
-        let fresh = tally.is_none();
-        match self.device {
-            None => {
-                let mut sim = Simulation::on_cpu(setup, true);
-                if fresh {
-                    let Ok(()) = sim.sort_and_density();
-                }
-                // The whole loop on a worker: a step then hands no job to the pool from outside.
-                on_worker(|| drive(sim, self.scene, self.initial, self.options, tally))
-            }
-            #[cfg(feature = "cuda")]
-            Some(gpu) => {
-                let backend_error = |e: crate::cuda::CudaError| match e {
-                    // f32 state takes about two thirds of f64's (docs/benchmark.md's memory table).
-                    crate::cuda::CudaError::OutOfMemory { .. } if R::NAME == "f64" => {
-                        RunError::Backend(format!("{e}, or run --precision f32 (about two thirds of the memory)"))
-                    }
-                    e => RunError::Backend(e.to_string()),
-                };
-                let mut sim = crate::cuda::GpuSimulation::on_gpu(setup, gpu).map_err(backend_error)?;
-                if fresh {
-                    sim.sort_and_density().map_err(backend_error)?;
-                }
-                if !self.options.quiet {
-                    let bytes = sim.backend.memory_bytes();
-                    let per_particle = bytes / sim.particles().capacity().max(1);
-                    eprintln!("device memory: {:.1} MiB ({per_particle} B per particle)", bytes as f64 / (1 << 20) as f64);
-                }
-                drive(sim, self.scene, self.initial, self.options, tally)
-            }
-            #[cfg(not(feature = "cuda"))]
-            Some(d) => match d {},
-        }
-    }
-}
-
-/// The progress bar: simulated time, steps/s, particles, dt and its limiting term, ETA. Where
-/// stderr is not a terminal (a log file, CI) a plain line every 10 s replaces it.
-struct Progress {
-    bar: Option<ProgressBar>,
-    last_line: Instant,
-    /// Time (s) and steps where this process took the run up, which rates and ETA count from.
-    start_time: f64,
-    start_steps: u64,
-}
-
-impl Progress {
-    fn new(quiet: bool, start_time: f64, start_steps: u64) -> Self {
-        let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
-            let bar = ProgressBar::new(1000);
-            bar.set_style(
-                ProgressStyle::with_template("{bar:30.cyan/blue} {percent:>3}% {msg} ETA {eta}").expect("a valid template"),
-            );
-            bar
-        });
-        Self { bar, last_line: Instant::now(), start_time, start_steps }
-    }
-
-    fn report<R: Real, M: Model<R>>(&mut self, sim: &RunState<R, M>, end: f64, wall: Duration) {
-        let rate = (sim.steps - self.start_steps) as f64 / wall.as_secs_f64().max(1e-9);
-        let line = format!(
-            "t = {:.4}/{end} s | {rate:.0} steps/s | {} fluid particles{} | dt {:.2e} s ({})",
-            sim.time,
-            sim.fluid_count(),
-            if sim.capacity_reached_at.is_some() { " (capacity full: inlets wait)" } else { "" },
-            sim.last_dt,
-            sim.last_limit
-        );
-        match &self.bar {
-            Some(bar) => {
-                bar.set_position((1000.0 * sim.time / end) as u64);
-                bar.set_message(line);
-            }
-            None if self.last_line.elapsed() >= Duration::from_secs(10) => {
-                self.last_line = Instant::now();
-                let eta = (end - sim.time) / (sim.time - self.start_time).max(1e-300) * wall.as_secs_f64();
-                eprintln!("{line} | ETA {eta:.0} s");
-            }
-            None => {}
-        }
-    }
-
-    fn finish(&self) {
-        if let Some(bar) = &self.bar {
-            bar.finish_and_clear();
-        }
-    }
-}
-
 fn io_error(what: &str, path: &std::path::Path, e: std::io::Error) -> RunError {
     RunError::Io(format!("cannot write {what} {}: {e}", path.display()))
-}
-
-fn drive<R: Real, M: Model<R>, B: StepBackend<R>>(
-    mut sim: Simulation<R, M, B>,
-    scene: &Scene,
-    initial: &InitialParticles,
-    options: &RunOptions,
-    resumed: Option<Tally>,
-) -> Result<Summary, RunError> {
-    let dir = &options.out_dir;
-
-    let mut bytes = Vec::new();
-    let boundary_path = dir.join(folder::BOUNDARY);
-    encode(&initial.boundary, &[] as &[Field], scene.output.vtu_encoding, &mut bytes);
-    write_atomically(&boundary_path, &bytes).map_err(|e| io_error("boundary", &boundary_path, e))?;
-
-    let end = scene.simulation.end_time_s;
-    let every_s = scene.output.every_s;
-    let every_steps = scene.output.every_steps;
-    let fresh = resumed.is_none();
-    let mut tally = resumed.unwrap_or(Tally { next_frame_time: every_s.unwrap_or(f64::INFINITY), ..Tally::default() });
-    let earlier_wall_s = tally.wall_s;
-    let expected_frames = every_s.map(|e| (end / e).ceil() as usize + 1).unwrap_or(1024);
-    let writes_series = scene.output.formats.contains(&FrameFormat::Vtu);
-    let series_path = series_path(dir, &scene.name);
-    let listed =
-        if writes_series { tally.frame_times.iter().enumerate().map(|(k, &t)| (t, frame_name(k))).collect() } else { Vec::new() };
-    let mut series = PvdSeries::new(series_path.clone(), expected_frames, listed);
-    let mut frame = Frame::default();
-    let started = Instant::now();
-    let mut write_frame = |run: &RunState<R, M>, host: &HostParticles<R>, tally: &mut Tally| -> Result<(), RunError> {
-        frame.capture(run, host);
-        let name = frame_name(tally.frame_times.len());
-        let path = dir.join(&name);
-        for format in &scene.output.formats {
-            let (file, bytes) = match format {
-                FrameFormat::Vtu => (path.clone(), frame.to_vtu(scene.output.vtu_encoding)),
-                FrameFormat::Ply => (path.with_extension("ply"), frame.to_ply()),
-                FrameFormat::Xyz => (path.with_extension("xyz"), frame.to_xyz()),
-            };
-            write_atomically(&file, bytes).map_err(|e| io_error("frame", &file, e))?;
-        }
-        if options.preview {
-            let v = &scene.material.viscosity;
-            // The paper's colouring, nu_inf to nu0; a Newtonian fluid has one colour, so speed.
-            let image = if v.nu_inf() < v.nu0_m2_s {
-                render(&frame.position, &frame.viscosity, (v.nu_inf(), v.nu0_m2_s), View::Both, PREVIEW_SIZE)
-            } else {
-                let speed = speeds(&frame.velocity);
-                render(&frame.position, &speed, own_range(Coloring::Speed, &speed), View::Both, PREVIEW_SIZE)
-            };
-            let png = path.with_extension("png");
-            image.save(&png).map_err(|e| io_error("preview", &png, e))?;
-        }
-        if writes_series {
-            series.push(run.time, &name).map_err(|e| io_error("series", series.path(), e))?;
-        }
-        tally.frame_times.push(run.time);
-        Ok(())
-    };
-    let save_checkpoint = |run: &RunState<R, M>, host: &HostParticles<R>, tally: &mut Tally| -> Result<(), RunError> {
-        tally.wall_s = earlier_wall_s + started.elapsed().as_secs_f64();
-        let path = dir.join(folder::CHECKPOINT);
-        checkpoint::write(dir, run, &host.particles, scene, tally).map_err(|e| io_error("checkpoint", &path, e))
-    };
-    if fresh {
-        write_frame(&sim.run, sim.host(), &mut tally)?;
-        save_checkpoint(&sim.run, sim.host(), &mut tally)?;
-    }
-
-    let mut last_report = started;
-    let mut progress = Progress::new(options.quiet, sim.run.time, sim.run.steps);
-    let summary = |sim: &RunState<R, M>, tally: &Tally| {
-        let wall = earlier_wall_s + started.elapsed().as_secs_f64();
-        Summary {
-            steps: sim.steps,
-            simulated_s: sim.time,
-            wall_s: wall,
-            particle_steps_per_s: if wall > 0.0 { tally.particle_steps / wall } else { 0.0 },
-            fluid_particles: sim.fluid_count(),
-            boundary_particles: sim.boundary_count(),
-            max_compression: tally.max_compression,
-            max_speed_m_s: tally.max_speed,
-            max_mach: tally.max_speed / scene.material.sound_speed_m_s,
-            removed: sim.removed,
-            frames: tally.frame_times.len(),
-            capacity_reached: sim.capacity_reached_at.map(|t| (t, sim.fluid_capacity())),
-            series: writes_series.then(|| series_path.clone()),
-        }
-    };
-    let stopped = |stop: StepError<B::Fault>, s: Summary| match stop {
-        StepError::Unstable(instability) => RunError::Unstable(instability, Box::new(s)),
-        StepError::Backend(e) => RunError::Device(e.to_string(), Box::new(s)),
-    };
-    while sim.run.time < end * (1.0 - 1e-12) {
-        let (dt, limit) = sim.next_dt();
-        let dt = dt.min(end - sim.run.time);
-        if let Err(stop) = sim.step_with(dt, limit) {
-            progress.finish();
-            return Err(stopped(stop, summary(&sim.run, &tally)));
-        }
-        tally.particle_steps += sim.backend.particle_bound() as f64;
-        let run = &sim.run;
-        tally.max_compression = tally.max_compression.max(run.diagnostics.max_compression);
-        tally.max_speed = tally.max_speed.max(run.diagnostics.max_speed);
-        let due = match every_steps {
-            Some(k) => run.steps.is_multiple_of(k),
-            None => run.time >= tally.next_frame_time * (1.0 - 1e-9),
-        };
-        if due {
-            if let Err(stop) = sim.sync() {
-                progress.finish();
-                return Err(stopped(stop, summary(&sim.run, &tally)));
-            }
-            write_frame(&sim.run, sim.host(), &mut tally)?;
-            tally.schedule_past(sim.run.time, every_s);
-            save_checkpoint(&sim.run, sim.host(), &mut tally)?;
-        }
-        if !options.quiet && last_report.elapsed() >= Duration::from_millis(200) {
-            last_report = Instant::now();
-            progress.report(&sim.run, end, started.elapsed());
-        }
-        if sim.settled() && options.stop.is_some_and(|stop| stop.load(Ordering::Relaxed)) {
-            progress.finish();
-            if let Err(stop) = sim.sync() {
-                return Err(stopped(stop, summary(&sim.run, &tally)));
-            }
-            save_checkpoint(&sim.run, sim.host(), &mut tally)?;
-            return Err(RunError::Interrupted(Box::new(summary(&sim.run, &tally))));
-        }
-    }
-    progress.finish();
-    if let Err(stop) = sim.sync() {
-        return Err(stopped(stop, summary(&sim.run, &tally)));
-    }
-    Ok(summary(&sim.run, &tally))
 }

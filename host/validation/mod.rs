@@ -6,6 +6,7 @@ pub mod jet;
 pub mod jet_axis;
 pub mod poiseuille;
 pub mod snapshot;
+pub mod suite;
 pub mod taylor_green;
 pub mod torus;
 pub mod tradeoff;
