@@ -523,3 +523,51 @@ fn the_default_time_step_serialises_as_before_viscous_velocity_existed() {
     let json = serde_json::to_string(&half).expect("serialises");
     assert!(json.contains(r#""viscous_velocity":"half_step""#), "{json}");
 }
+
+/// Every field of a scene either fixes its physics (and so its checkpoints' fingerprint), may
+/// change on resume, or only describes the run: a field added to the scene must be put in one.
+#[test]
+fn every_scene_field_is_physics_resumable_or_description() {
+    use coil::run::checkpoint::{PHYSICS, RESUMABLE};
+    const DESCRIPTION: [&str; 4] = ["name", "description", "notes", "variant"];
+    fn leaves(value: &serde_json::Value, path: String, out: &mut Vec<String>) {
+        match value {
+            serde_json::Value::Object(map) => {
+                for (key, v) in map {
+                    leaves(v, if path.is_empty() { key.clone() } else { format!("{path}.{key}") }, out);
+                }
+            }
+            _ => out.push(path),
+        }
+    }
+    let covers = |list: &[&str], field: &str| list.iter().any(|f| field == *f || field.starts_with(&format!("{f}.")));
+    for entry in std::fs::read_dir("scenes").expect("scenes/") {
+        let path = entry.expect("an entry").path();
+        let scene = Scene::load(&path).expect("a shipped scene loads");
+        let mut fields = Vec::new();
+        leaves(&serde_json::to_value(coil::run::run_log::resolved(&scene)).expect("serialises"), String::new(), &mut fields);
+        for field in fields {
+            let kinds = [covers(&PHYSICS, &field), covers(&RESUMABLE, &field), covers(&DESCRIPTION, &field)];
+            assert_eq!(kinds.iter().filter(|&&k| k).count(), 1, "{}: {field} is in {kinds:?}", path.display());
+        }
+    }
+}
+
+#[test]
+fn the_fingerprint_follows_physics_and_ignores_the_rest() {
+    use coil::run::checkpoint::fingerprint;
+    let scene = Scene::load(std::path::Path::new("scenes/round_jet.toml")).expect("loads");
+    let base = fingerprint(&scene);
+    let mut renamed = scene.clone();
+    renamed.name = "another".into();
+    renamed.description = "told otherwise".into();
+    renamed.output.every_s = Some(0.5);
+    renamed.simulation.end_time_s *= 2.0;
+    assert_eq!(fingerprint(&renamed), base);
+    let mut thicker = scene.clone();
+    thicker.material.viscosity.nu0_m2_s *= 1.5;
+    assert_ne!(fingerprint(&thicker), base);
+    let mut moved = scene.clone();
+    moved.inlets[0].position_m[0] += 0.001;
+    assert_ne!(fingerprint(&moved), base);
+}

@@ -23,7 +23,8 @@ use coil_kernels::Real;
 use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"COILCKPT";
-const FORMAT_VERSION: u32 = 1;
+/// 2: the fingerprint hashes the [`PHYSICS`] fields only.
+const FORMAT_VERSION: u32 = 2;
 
 /// FNV-1a, 64 bits: the same value on every machine and Rust version, unlike std's hasher.
 fn fnv1a(bytes: &[u8]) -> u64 {
@@ -35,14 +36,53 @@ fn fnv1a(bytes: &[u8]) -> u64 {
 /// what it writes.
 pub const RESUMABLE: [&str; 3] = ["simulation.end_time_s", "simulation.time_step", "output"];
 
-/// Identifies the physics of `scene` (the resolved scene `run.json` logs, precision included):
-/// a checkpoint resumes only the scene it was taken from, up to the [`RESUMABLE`] fields.
+/// The fields that fix what a step computes, as `--set` spells them: a checkpoint resumes only a
+/// scene that agrees with the one it was taken from on each (array sections as a whole). A field
+/// added to the scene joins this list only if it changes the physics, and must then be left out
+/// of the serialized scene at its default, so that checkpoints taken before it existed resume.
+pub const PHYSICS: [&str; 25] = [
+    "material.rest_density_kg_m3",
+    "material.sound_speed_m_s",
+    "material.clamp_negative_pressure",
+    "material.pressure_gradient",
+    "material.density_kernel",
+    "material.particle_spacing_m",
+    "material.support_radius_factor",
+    "material.gravity_m_s2",
+    "material.viscosity.operator",
+    "material.viscosity.nu0_m2_s",
+    "material.viscosity.nu_inf_m2_s",
+    "material.viscosity.cross_k_s",
+    "material.viscosity.cross_n",
+    "material.viscosity.hourglass_control",
+    "domain.min_m",
+    "domain.max_m",
+    "domain.periodic",
+    "simulation.precision",
+    "simulation.max_fluid_particles",
+    "simulation.walls",
+    "fluid_block",
+    "fluid_torus",
+    "fluid_cylinder",
+    "boundary",
+    "inlet",
+];
+
+/// Identifies the physics of `scene` (resolved, as `run.json` logs it): a hash of the
+/// [`PHYSICS`] fields, each with its name, in that order.
 pub fn fingerprint(scene: &Scene) -> u64 {
-    let mut s = crate::run::run_log::resolved(scene);
-    s.simulation.end_time_s = 0.0;
-    s.simulation.time_step = Default::default();
-    s.output = Default::default();
-    fnv1a(&serde_json::to_vec(&s).expect("a scene serialises"))
+    let json = serde_json::to_value(crate::run::run_log::resolved(scene)).expect("a scene serialises");
+    let mut bytes = Vec::new();
+    for field in PHYSICS {
+        let value = field.split('.').try_fold(&json, |v, key| v.get(key));
+        if let Some(value) = value.filter(|v| !v.is_null()) {
+            bytes.extend_from_slice(field.as_bytes());
+            bytes.push(b'=');
+            serde_json::to_writer(&mut bytes, value).expect("a value serialises");
+            bytes.push(b'\n');
+        }
+    }
+    fnv1a(&bytes)
 }
 
 fn limit_code(limit: Limit) -> u8 {

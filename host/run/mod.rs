@@ -10,7 +10,7 @@ pub mod run_log;
 pub mod summary;
 mod time_loop;
 
-use crate::run::run_log::{resolved, Resumed, RunLog};
+use crate::run::run_log::{resolved, BackendName, Resumed, RunLog, Status};
 use crate::scene::setup::initial_particles;
 use crate::scene::{Precision, Scene, SceneError};
 use crate::simulation::model::with_precision_and_model;
@@ -174,13 +174,13 @@ fn execute(
         resumed.push(Resumed { step: r.checkpoint.steps, time_s: r.checkpoint.time });
     }
     let mut log = RunLog {
-        coil_version: env!("CARGO_PKG_VERSION"),
-        scene_file,
-        overrides: &options.overrides,
-        backend: if device.is_some() { "cuda" } else { "cpu" },
+        coil_version: env!("CARGO_PKG_VERSION").into(),
+        scene_file: scene_file.into(),
+        overrides: options.overrides.clone(),
+        backend: if device.is_some() { BackendName::Cuda } else { BackendName::Cpu },
         precision,
         threads: rayon::current_num_threads(),
-        status: "running",
+        status: Status::Running,
         diagnosis: None,
         resumed,
         summary: None,
@@ -191,11 +191,11 @@ fn execute(
     let checkpoint = resumption.as_ref().map(|r| &r.checkpoint);
     let result = with_precision_and_model(precision, scene, Drive { scene, initial: &initial, options, device, checkpoint });
     (log.status, log.diagnosis, log.summary) = match &result {
-        Ok(summary) => ("completed", None, Some(summary.clone())),
-        Err(RunError::Unstable(i, summary)) => ("unstable", Some(i.to_string()), Some(Summary::clone(summary))),
-        Err(RunError::Device(e, summary)) => ("failed", Some(e.clone()), Some(Summary::clone(summary))),
-        Err(e @ RunError::Interrupted(summary)) => ("interrupted", Some(e.to_string()), Some(Summary::clone(summary))),
-        Err(e) => ("failed", Some(e.to_string()), None),
+        Ok(summary) => (Status::Completed, None, Some(summary.clone())),
+        Err(RunError::Unstable(i, summary)) => (Status::Unstable, Some(i.to_string()), Some(Summary::clone(summary))),
+        Err(RunError::Device(e, summary)) => (Status::Failed, Some(e.clone()), Some(Summary::clone(summary))),
+        Err(e @ RunError::Interrupted(summary)) => (Status::Interrupted, Some(e.to_string()), Some(Summary::clone(summary))),
+        Err(e) => (Status::Failed, Some(e.to_string()), None),
     };
     log.write(&options.out_dir).map_err(|e| io_error("run log", &log_path, e))?;
     result
@@ -227,10 +227,10 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
     let bad = |file: &Path, field: &str, reason: String| {
         RunError::Scene(SceneError { file: file.display().to_string(), field: field.into(), reason })
     };
-    let text = std::fs::read_to_string(&log_path).map_err(|e| {
-        bad(&log_path, "(file)", format!("cannot be read ({e}): {} is not the output folder of a coil run", dir.display()))
-    })?;
-    let log: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(&log_path, "(syntax)", e.to_string()))?;
+    if !log_path.is_file() {
+        return Err(bad(&log_path, "(file)", format!("is missing: {} is not the output folder of a coil run", dir.display())));
+    }
+    let log = RunLog::read(&log_path).map_err(RunError::Scene)?;
     let mut overrides = Vec::new();
     for given in &options.set {
         let key = given.split_once('=').map_or(given.as_str(), |(key, _)| key.trim());
@@ -258,7 +258,7 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
             format!("was taken from another scene than the one {} logs (edited since the run?)", log_path.display()),
         ));
     }
-    if scene.output.every_s != log["scene"]["output"]["every_s"].as_f64() {
+    if scene.output.every_s != log.scene.output.every_s {
         checkpoint.tally.reschedule(scene.output.every_s, checkpoint.time);
     }
     let end = scene.simulation.end_time_s;
@@ -270,11 +270,8 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
         };
         return Err(bad(&log_path, "simulation.end_time_s", reason));
     }
-    let scene_file = log["scene_file"].as_str().unwrap_or_default().to_string();
-    let mut all_overrides: Vec<String> =
-        log["overrides"].as_array().map(|a| a.iter().filter_map(|o| o.as_str().map(String::from)).collect()).unwrap_or_default();
+    let mut all_overrides = log.overrides;
     all_overrides.extend(options.set.iter().cloned());
-    let earlier = serde_json::from_value(log["resumed"].clone()).unwrap_or_default();
     remove_frames_from(dir, checkpoint.tally.frame_times.len())?;
     let run_options = RunOptions {
         backend: options.backend,
@@ -286,7 +283,7 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
         overwrite: false,
         stop: options.stop,
     };
-    execute(device, &scene, &scene_file, &run_options, Some(Resumption { checkpoint, earlier }))
+    execute(device, &scene, &log.scene_file, &run_options, Some(Resumption { checkpoint, earlier: log.resumed }))
 }
 
 /// Removes the frames numbered `first` and later: written after the checkpoint by a run that

@@ -4,7 +4,7 @@
 
 use super::summary::Summary;
 use crate::output::write_atomically;
-use crate::scene::{Precision, Scene};
+use crate::scene::{Precision, Scene, SceneError};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -23,31 +23,65 @@ pub struct Resumed {
     pub time_s: f64,
 }
 
-#[derive(Serialize)]
-pub struct RunLog<'a> {
-    pub coil_version: &'static str,
-    pub scene_file: &'a str,
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    Running,
+    Completed,
+    Unstable,
+    /// Ctrl-C or SIGTERM.
+    Interrupted,
+    /// Output could not be written, or the device failed.
+    Failed,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BackendName {
+    Cpu,
+    Cuda,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunLog {
+    pub coil_version: String,
+    pub scene_file: String,
     /// The `--set` overrides, already applied to `scene`.
-    pub overrides: &'a [String],
-    pub backend: &'static str,
+    pub overrides: Vec<String>,
+    pub backend: BackendName,
     pub precision: Precision,
     pub threads: usize,
-    /// "running", "completed", "unstable", "interrupted" (Ctrl-C or SIGTERM) or "failed"
-    /// (output could not be written, or the device failed).
-    pub status: &'static str,
+    pub status: Status,
     /// Why the run stopped early, if it did.
     pub diagnosis: Option<String>,
     /// Each time `coil resume` continued the run, in order; absent for a run never stopped.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub resumed: Vec<Resumed>,
     /// The summary printed at the end (None while running); a resumed run's covers it all.
     pub summary: Option<Summary>,
+    /// Resolved: every default written out.
     pub scene: Scene,
 }
 
-impl RunLog<'_> {
+impl RunLog {
     pub fn write(&self, dir: &Path) -> std::io::Result<()> {
         let json = serde_json::to_vec_pretty(self).map_err(std::io::Error::other)?;
         write_atomically(&dir.join(super::folder::LOG), &json)
+    }
+
+    /// Reads a run log; the error names the file and the field that does not fit.
+    pub fn read(path: &Path) -> Result<RunLog, SceneError> {
+        let file = path.display().to_string();
+        let bad = |field: String, reason: String| SceneError { file: file.clone(), field, reason };
+        let text = std::fs::read_to_string(path).map_err(|e| bad("(file)".into(), format!("cannot be read: {e}")))?;
+        let json = &mut serde_json::Deserializer::from_str(&text);
+        serde_path_to_error::deserialize(json).map_err(|e| {
+            let field = e.path().to_string();
+            let inner = e.into_inner();
+            match inner.classify() {
+                serde_json::error::Category::Data if field != "." => bad(field, inner.to_string()),
+                _ => bad("(syntax)".into(), inner.to_string()),
+            }
+        })
     }
 }

@@ -471,17 +471,19 @@ pub enum NozzleMotion {
 
 /// The TOML text of a scene file; a `run.json` gives its `scene`, written back as TOML.
 fn scene_text(path: &Path) -> Result<String, SceneError> {
-    let file = path.display().to_string();
-    let bad = |field: &str, reason: String| SceneError { file: file.clone(), field: field.into(), reason };
-    let text = std::fs::read_to_string(path).map_err(|e| bad("(file)", format!("cannot be read: {e}")))?;
-    if path.extension().is_none_or(|x| x != "json") {
-        return Ok(text);
+    if path.extension().is_some_and(|x| x == "json") {
+        let scene = crate::run::run_log::RunLog::read(path)?.scene;
+        return toml::to_string(&scene).map_err(|e| SceneError {
+            file: path.display().to_string(),
+            field: "scene".into(),
+            reason: e.to_string(),
+        });
     }
-    let log: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad("(syntax)", e.to_string()))?;
-    let scene: Scene =
-        serde_json::from_value(log.get("scene").cloned().ok_or_else(|| bad("scene", "missing: not a run.json".into()))?)
-            .map_err(|e| bad("scene", e.to_string()))?;
-    toml::to_string(&scene).map_err(|e| bad("scene", e.to_string()))
+    std::fs::read_to_string(path).map_err(|e| SceneError {
+        file: path.display().to_string(),
+        field: "(file)".into(),
+        reason: format!("cannot be read: {e}"),
+    })
 }
 
 /// For serde's "unknown field `x`, expected one of `a`, `b`" (or "expected `a` or `b`"): the
