@@ -2,7 +2,6 @@
 pub use coil_kernels as kernels;
 pub mod bench;
 pub mod cpu;
-#[cfg(feature = "cuda")]
 pub mod cuda;
 pub mod output;
 pub mod run;

@@ -59,6 +59,21 @@ fn a_small_bench_writes_its_report_next_to_the_paper() {
     assert!(md.contains("| 1K | 1000 |") && md.contains("| 7.200 | 1.030 | 7.0 |"), "{md}");
     let png = std::fs::read(out.join("bench.png")).expect("bench.png");
     assert_eq!(&png[1..4], b"PNG");
+    let svg = std::fs::read_to_string(out.join("bench.svg")).expect("bench.svg");
+    assert!(svg.starts_with("<svg"), "{svg}");
+    // The plotted series: one row per point, each size's median as bench.csv holds it.
+    let plotted = std::fs::read_to_string(out.join("bench.plot.csv")).expect("bench.plot.csv");
+    assert!(plotted.starts_with("series,"), "{plotted}");
+    for row in csv.lines().skip(1) {
+        let fields: Vec<&str> = row.split(',').collect();
+        let (fluid, median): (f64, f64) = (fields[1].parse().expect("fluid"), fields[6].parse().expect("median"));
+        // Both files write the shortest digits that read back as the same f64.
+        let plots_it = |line: &str| {
+            let xy: Vec<f64> = line.rsplitn(3, ',').take(2).map(|v| v.parse().unwrap_or(f64::NAN)).collect();
+            xy.len() == 2 && xy[1] == fluid && xy[0] == median
+        };
+        assert!(plotted.lines().any(plots_it), "{fluid} particles, {median} ms not plotted in {plotted}");
+    }
     let _ = std::fs::remove_dir_all(&out);
 }
 

@@ -193,8 +193,7 @@ fn dam_break() -> Scene {
     let root = std::env::var("CARGO_MANIFEST_DIR").unwrap_or_else(|_| env!("CARGO_MANIFEST_DIR").into());
     let path = Path::new(&root).join("scenes/dam_break.toml");
     let text = std::fs::read_to_string(&path).expect("shipped scene");
-    let text = text.replace("particle_spacing_m = 0.02", "particle_spacing_m = 0.04");
-    Scene::parse(&text, "dam_break.toml").expect("valid")
+    Scene::parse(&common::set(&text, &["material.particle_spacing_m=0.04"]), "dam_break.toml").expect("valid")
 }
 
 fn cross<R: Real>(scene: &Scene) -> StressModel<Cross<R>> {

@@ -56,9 +56,10 @@ fn rectangular_inlet_delivers_rho0_area_speed() {
 fn the_nozzle_tube_pushes_the_jet_at_its_speed_when_the_jet_is_blocked() {
     // A plate 3 support radii below the exit stops the jet; the fluid in the tube still moves at
     // exactly the jet velocity, so the layers keep their spacing and the flow rate holds.
-    let text =
-        jet_scene("nozzle = { shape = \"circle\", radius_m = 0.006 }", "[[boundary]]\nshape = \"plate\"\nheight_m = -0.012")
-            .replace("nu0_m2_s = 0.001", "nu0_m2_s = 0.01");
+    let text = common::set(
+        &jet_scene("nozzle = { shape = \"circle\", radius_m = 0.006 }", "[[boundary]]\nshape = \"plate\"\nheight_m = -0.012"),
+        &["material.viscosity.nu0_m2_s=0.01"],
+    );
     let scene = common::scene(&text);
     let initial = initial_particles(&scene, "jet.toml").expect("valid");
     let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.01 }));
@@ -87,11 +88,13 @@ fn the_nozzle_tube_pushes_the_jet_at_its_speed_when_the_jet_is_blocked() {
 
 #[test]
 fn inlet_stops_at_the_particle_budget_and_moving_nozzle_follows_waypoints() {
-    let text = jet_scene(
-        "nozzle = { shape = \"circle\", radius_m = 0.004 }",
-        "motion = { waypoints = [[0.0, 0.0, 0.0, 0.0], [0.1, 0.02, 0.0, 0.0]] }",
-    )
-    .replace("max_fluid_particles = 200000", "max_fluid_particles = 500");
+    let text = common::set(
+        &jet_scene(
+            "nozzle = { shape = \"circle\", radius_m = 0.004 }",
+            "motion = { waypoints = [[0.0, 0.0, 0.0, 0.0], [0.1, 0.02, 0.0, 0.0]] }",
+        ),
+        &["simulation.max_fluid_particles=500"],
+    );
     let scene = common::scene(&text);
     let inlet = coil::simulation::inlet::Inlet::new(&scene.inlets[0], 0.002, 0.004, 1.0, 1.0);
     let (mid, v) = inlet.nozzle(0.05);
@@ -137,41 +140,41 @@ fn automatic_dt_follows_equation_10() {
     // h = 0.04 m, c = 20 m/s, nu0 = 0.01 m^2/s: 0.1 h / c = 2e-4 s, 0.1 h^2 / (8 nu0) = 2e-3 s.
     let (dt, limit) = sim.next_dt();
     assert!((dt - 2e-4).abs() < 1e-15 && limit == Limit::Acoustic, "{dt} {limit:?}");
-    let viscous = common::scene(&text.replace("nu0_m2_s = 0.01", "nu0_m2_s = 1.0"));
+    let viscous = common::scene(&common::set(&text, &["material.viscosity.nu0_m2_s=1.0"]));
     let sim = Simulation::<f64, _>::new(&viscous, &initial, StressModel(Newtonian { nu0: 1.0 }));
     let (dt, limit) = sim.next_dt();
     assert!((dt - 2e-5).abs() < 1e-15 && limit == Limit::Viscous, "{dt} {limit:?}");
 }
 
-/// The box of `automatic_dt_follows_equation_10` (bound 2e-4 s, acoustic) with a
-/// `[simulation.time_step]` table of `entries`.
-fn box_with_time_step(entries: &str) -> String {
-    let base = common::box_scene(0.02, [0.2; 3], [0.2; 3], "");
-    base.replace("precision = \"f64\"", &format!("precision = \"f64\"\n[simulation.time_step]\n{entries}"))
+/// The box of `automatic_dt_follows_equation_10` (bound 2e-4 s, acoustic) with `time_step`
+/// overrides, each `field=value` of `simulation.time_step`.
+fn box_with_time_step(time_step: &[&str]) -> String {
+    let set: Vec<String> = time_step.iter().map(|o| format!("simulation.time_step.{o}")).collect();
+    common::set(&common::box_scene(0.02, [0.2; 3], [0.2; 3], ""), &set.iter().map(String::as_str).collect::<Vec<_>>())
 }
 
 #[test]
 fn fixed_dt_above_the_bound_is_refused_unless_overridden() {
-    let above = box_with_time_step("fixed_s = 3e-4");
+    let above = box_with_time_step(&["fixed_s=3e-4"]);
     let err = coil::scene::Scene::parse(&above, "box.toml").expect_err("refused");
     assert_eq!(err.field, "simulation.time_step.fixed_s");
     assert!(err.reason.contains("Eq. (10)") && err.reason.contains("2.000e-4"), "{}", err.reason);
-    let allowed = above.replace("fixed_s = 3e-4", "fixed_s = 3e-4\nallow_above_stability_bound = true");
+    let allowed = box_with_time_step(&["fixed_s=3e-4", "allow_above_stability_bound=true"]);
     assert!(coil::scene::Scene::parse(&allowed, "box.toml").is_ok());
 }
 
 #[test]
 fn a_safety_factor_above_one_is_refused_unless_overridden_and_then_scales_the_bound() {
-    let above = box_with_time_step("safety_factor = 4.0");
+    let above = box_with_time_step(&["safety_factor=4.0"]);
     let err = coil::scene::Scene::parse(&above, "box.toml").expect_err("refused");
     assert_eq!(err.field, "simulation.time_step.safety_factor");
     assert!(err.reason.contains("Eq. (10)") && err.reason.contains("allow_above_stability_bound"), "{}", err.reason);
-    let negative = above.replace("safety_factor = 4.0", "safety_factor = -1.0");
+    let negative = box_with_time_step(&["safety_factor=-1.0"]);
     assert_eq!(
         coil::scene::Scene::parse(&negative, "box.toml").expect_err("refused").field,
         "simulation.time_step.safety_factor"
     );
-    let allowed = common::scene(&above.replace("safety_factor = 4.0", "safety_factor = 4.0\nallow_above_stability_bound = true"));
+    let allowed = common::scene(&box_with_time_step(&["safety_factor=4.0", "allow_above_stability_bound=true"]));
     let initial = initial_particles(&allowed, "box.toml").expect("particles");
     let sim = Simulation::<f64, _>::new(&allowed, &initial, StressModel(Newtonian { nu0: allowed.material.viscosity.nu0_m2_s }));
     let (bound, _) = sim.run.stepper.bound.dt();

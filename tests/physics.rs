@@ -12,6 +12,9 @@ use coil_kernels::cell_grid::Neighbors;
 use coil_kernels::cross_viscosity::{Cross, Newtonian};
 use coil_kernels::velocity_gradient::velocity_gradient;
 use coil_kernels::view::{SymTensorView, View};
+
+/// Earth's gravity, for the test boxes that have none.
+const GRAVITY: &str = "material.gravity_m_s2=[0.0, -9.8, 0.0]";
 use coil_kernels::viscosity::stress_andrade2014::StressDivergence;
 
 fn simulation<M: Model<f64>>(text: &str, model: M) -> Simulation<f64, M> {
@@ -74,8 +77,7 @@ fn velocity_gradient_of_a_linear_field_in_the_interior() {
 #[test]
 fn pressure_and_viscous_forces_conserve_momentum() {
     // A jittered block in free space: no walls, no gravity, every pair force inside the set.
-    let text = common::box_scene(0.01, [0.1; 3], [0.1; 3], "")
-        .replace("[[boundary]]\nshape = \"box\"\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [0.1, 0.1, 0.1]\n", "");
+    let text = common::set(&common::box_scene(0.01, [0.1; 3], [0.1; 3], ""), &["boundary=[]"]);
     let cross = Cross { nu0: 0.5, nu_inf: 0.05, k: 1.0, n: 1.0 };
     let mut sim = simulation(&text, StressModel(cross));
     assert_eq!(sim.run.boundary_count(), 0);
@@ -110,8 +112,7 @@ fn pressure_and_viscous_forces_conserve_momentum() {
 
 #[test]
 fn laplacian_model_runs_and_is_not_the_stress_model() {
-    let text = common::box_scene(0.02, [0.2, 0.3, 0.2], [0.2, 0.2, 0.2], "")
-        .replace("gravity_m_s2 = [0.0, 0.0, 0.0]", "gravity_m_s2 = [0.0, -9.8, 0.0]");
+    let text = common::set(&common::box_scene(0.02, [0.2, 0.3, 0.2], [0.2, 0.2, 0.2], ""), &[GRAVITY]);
     let mut a = simulation(&text, LaplacianModel(Newtonian { nu0: 0.01 }));
     let mut b = simulation(&text, StressModel(Newtonian { nu0: 0.01 }));
     assert!(a.particles().stress.is_none(), "the Laplacian operator allocates no stress");
@@ -138,8 +139,7 @@ fn fluid_at_rest_under_gravity_stays_near_rest() {
     // A closed box filled under gravity settles to hydrostatic compression rho g H / c^2; the
     // start from uniform density sends acoustic waves of speed amplitude ~ g H / c.
     let (h_m, c, g) = (0.2, 20.0, 9.8);
-    let text = common::box_scene(0.02, [0.2; 3], [0.2; 3], "")
-        .replace("gravity_m_s2 = [0.0, 0.0, 0.0]", "gravity_m_s2 = [0.0, -9.8, 0.0]");
+    let text = common::set(&common::box_scene(0.02, [0.2; 3], [0.2; 3], ""), &[GRAVITY]);
     let mut sim = simulation(&text, StressModel(Newtonian { nu0: 0.01 }));
     let mut max_speed = 0.0f64;
     while sim.run.time < 0.3 {
@@ -193,8 +193,7 @@ fn neighbor_search_equals_brute_force() {
 
 #[test]
 fn results_do_not_depend_on_the_thread_count_or_the_calling_thread() {
-    let text = common::box_scene(0.02, [0.3, 0.3, 0.2], [0.12, 0.2, 0.2], "")
-        .replace("gravity_m_s2 = [0.0, 0.0, 0.0]", "gravity_m_s2 = [0.0, -9.8, 0.0]");
+    let text = common::set(&common::box_scene(0.02, [0.3, 0.3, 0.2], [0.12, 0.2, 0.2], ""), &[GRAVITY]);
     let cross = Cross { nu0: 0.05, nu_inf: 0.005, k: 1.0, n: 1.0 };
     let steps = || {
         let mut sim = simulation(&text, StressModel(cross));
@@ -255,13 +254,12 @@ fn the_cpu_neighbor_lists_give_the_grids_results_to_the_bit() {
         }
     }
     let cross = Cross { nu0: 0.05, nu_inf: 0.005, k: 1.0, n: 1.0 };
-    let dam = common::box_scene(0.02, [0.3, 0.3, 0.2], [0.12, 0.2, 0.2], "")
-        .replace("gravity_m_s2 = [0.0, 0.0, 0.0]", "gravity_m_s2 = [0.0, -9.8, 0.0]");
+    let dam = common::set(&common::box_scene(0.02, [0.3, 0.3, 0.2], [0.12, 0.2, 0.2], ""), &[GRAVITY]);
     compare("dam break, paper's operator", &dam, StressModel(cross), 40);
     compare("dam break, hourglass control", &dam, HourglassStressModel { rheology: cross, coefficient: 1.0 }, 40);
     compare("dam break, Morris's shear-thinning operator", &dam, ShearThinningMorrisModel(cross), 40);
     compare("dam break, Laplacian operator", &dam, LaplacianModel(Newtonian { nu0: 0.05 }), 40);
-    let mirrored = dam.replace("precision = \"f64\"", "precision = \"f64\"\nwalls = \"mirrored\"");
+    let mirrored = common::set(&dam, &["simulation.walls=mirrored"]);
     compare("dam break, mirrored walls", &mirrored, StressModel(cross), 40);
     // The jet lands on a plate 12 mm below the nozzle at 0.02 s and spreads.
     let jet = common::jet_scene(

@@ -114,10 +114,8 @@ fn an_earlier_run_is_kept_unless_overwrite_is_given() {
 fn a_short_run_writes_a_frame_series() {
     let dir = std::env::temp_dir().join(format!("coil-run-{}", std::process::id()));
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
-    let text = std::fs::read_to_string(scene)
-        .expect("scene")
-        .replace("end_time_s = 1.0", "end_time_s = 0.004")
-        .replace("every_s = 0.02", "every_s = 0.002");
+    let text =
+        common::set(&std::fs::read_to_string(scene).expect("scene"), &["simulation.end_time_s=0.004", "output.every_s=0.002"]);
     std::fs::create_dir_all(&dir).expect("temp dir");
     let path = dir.join("short.toml");
     std::fs::write(&path, text).expect("write");
@@ -208,7 +206,7 @@ fn a_nozzle_wobbling_a_spacing_or_a_tube_outside_the_domain_is_refused() {
     for (radius, apart) in
         [("0.0025", None), ("0.0035", Some("0.41 spacings")), ("0.0001", Some("504.37 spacings")), ("0.004", None)]
     {
-        let text = good.replacen("radius_m = 0.01", &format!("radius_m = {radius}"), 1);
+        let text = common::set(&good, &[&format!("inlet[0].nozzle.radius_m={radius}")]);
         let scene = Scene::parse(&text, "jet.toml").expect("a positive radius parses");
         match (initial_particles(&scene, "jet.toml"), apart) {
             (Ok(_), None) => {}
@@ -253,7 +251,7 @@ fn a_run_too_large_for_the_machine_is_refused_before_it_allocates() {
     assert!(e.field == "simulation.max_fluid_particles" && e.reason.contains("1.0 GiB"), "{e}");
 
     let mut block = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml")).expect("scene");
-    block = block.replace("particle_spacing_m = 0.02", "particle_spacing_m = 0.002");
+    block = common::set(&block, &["material.particle_spacing_m=0.002"]);
     let fine = Scene::parse(&block, "dam.toml").expect("8e6 particles at 2 mm");
     let e = initial_particles_within(&fine, "dam.toml", &ParticleLimit::with_memory(&fine, Some(1 << 30)))
         .expect_err("a 0.4 m cube at 2 mm holds 8e6 particles");

@@ -220,7 +220,7 @@ impl Gpu {
 
     /// The device's peak floating-point rates, from its multiprocessors, clock and
     /// architecture; none on the emulated device or where the driver does not say.
-    pub fn peak_rates(&self) -> Option<crate::bench::PeakRates> {
+    pub fn peak_rates(&self) -> Option<super::peak_rates::PeakRates> {
         let Engine::Cuda(d) = &self.engine else {
             return None;
         };
@@ -228,7 +228,7 @@ impl Gpu {
         let multiprocessors = attribute(sys::CUdevice_attribute::CU_DEVICE_ATTRIBUTE_MULTIPROCESSOR_COUNT)?;
         // The peak clock, in kHz.
         let clock_hz = attribute(sys::CUdevice_attribute::CU_DEVICE_ATTRIBUTE_CLOCK_RATE)? * 1e3;
-        crate::bench::PeakRates::of(d.ctx.compute_capability().ok()?, multiprocessors, clock_hz)
+        super::peak_rates::PeakRates::of(d.ctx.compute_capability().ok()?, multiprocessors, clock_hz)
     }
 
     /// (free, total) bytes of device memory; none known on an emulated device of no set size.

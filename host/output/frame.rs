@@ -5,6 +5,7 @@ use crate::output::vtu::{encode, Field, VtuEncoding};
 use crate::simulation::model::Model;
 use crate::simulation::particles::{vec3_view, HostParticles};
 use crate::simulation::RunState;
+use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::density::pressure;
 use coil_kernels::velocity_gradient::{rate_of_deformation, shear_rate, velocity_gradient};
 use coil_kernels::view::View;
@@ -65,7 +66,7 @@ impl Frame {
             self.velocity.push([0, 1, 2].map(|a| p.velocity[a][i].to_f64() as f32));
             self.density.push(rho.to_f64() as f32);
             self.pressure.push(pressure(rho, &fluid).to_f64() as f32);
-            self.viscosity.push(run.model.viscosity(R::from_f64(d as f64)).to_f64() as f32);
+            self.viscosity.push(run.model.law().viscosity(R::from_f64(d as f64)).to_f64() as f32);
             self.shear_rate.push(d);
             self.id.push(p.id[i]);
         }

@@ -1,5 +1,6 @@
 //! Frames: one VTK XML `.vtu` per frame plus a `.pvd` series that ParaView opens.
 
+pub mod font;
 pub mod frame;
 pub mod image;
 pub mod plot;

@@ -1,7 +1,13 @@
-//! Line and scatter charts as PNG, for the figures of `coil bench`, `coil validate` and
-//! `coil tradeoff`: linear or logarithmic axes, ticks, a title and a legend.
+//! Line and scatter charts for the figures of `coil bench`, `coil validate` and `coil tradeoff`,
+//! drawn by plotters: each one as SVG, as PNG (lettered in the embedded DejaVu Sans, so the
+//! picture is the same on every machine), and its series as CSV to replot elsewhere.
 
-use crate::output::image::{char_width, text, text_vertical, Image, INK};
+use crate::output::write_atomically;
+use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::fmt::Write as _;
+use std::path::Path;
 
 /// Distinct colours for series, in order of use.
 pub const PALETTE: [[u8; 3]; 8] = [
@@ -15,12 +21,9 @@ pub const PALETTE: [[u8; 3]; 8] = [
     [127, 127, 127],
 ];
 
-const GRID: [u8; 3] = [225, 225, 225];
-const FONT: i64 = 2;
-const MARGIN_LEFT: f64 = 96.0;
-const MARGIN_RIGHT: f64 = 24.0;
-const MARGIN_TOP: f64 = 44.0;
-const MARGIN_BOTTOM: f64 = 64.0;
+/// Size of every chart (pixels).
+const SIZE: (u32, u32) = (900, 640);
+const FONT: &str = crate::output::font::FAMILY;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Line {
@@ -62,79 +65,26 @@ impl Axis {
         Self { label: label.into(), log: true }
     }
 
-    fn map(&self, v: f64) -> f64 {
-        if self.log {
-            v.log10()
-        } else {
-            v
-        }
-    }
-
     fn usable(&self, v: f64) -> bool {
         v.is_finite() && (!self.log || v > 0.0)
     }
 
-    /// The shown interval, in mapped units, around the mapped data range.
+    /// The shown interval around the usable values, 5 % wider each side (on a log axis, in
+    /// decades).
     fn range(&self, values: impl Iterator<Item = f64>) -> (f64, f64) {
+        let map = |v: f64| if self.log { v.log10() } else { v };
         let (lo, hi) = values
             .filter(|&v| self.usable(v))
-            .map(|v| self.map(v))
+            .map(map)
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
-        if !lo.is_finite() {
-            return (0.0, 1.0);
-        }
+        let (lo, hi) = if lo.is_finite() { (lo, hi) } else { (0.0, 1.0) };
         let span = if hi > lo { hi - lo } else { lo.abs().max(1.0) * 0.1 };
-        (lo - 0.05 * span, hi + 0.05 * span)
-    }
-
-    /// Tick values (data units) inside the mapped interval (lo, hi).
-    fn ticks(&self, lo: f64, hi: f64) -> Vec<f64> {
+        let (lo, hi) = (lo - 0.05 * span, hi + 0.05 * span);
         if self.log {
-            let decades: Vec<f64> = (lo.ceil() as i32..=hi.floor() as i32).map(|k| 10f64.powi(k)).collect();
-            if decades.len() >= 2 {
-                return decades;
-            }
-            let mut ticks = Vec::new();
-            for k in lo.floor() as i32..=hi.ceil() as i32 {
-                for m in [1.0, 2.0, 5.0] {
-                    let v = m * 10f64.powi(k);
-                    if (lo..=hi).contains(&v.log10()) {
-                        ticks.push(v);
-                    }
-                }
-            }
-            if ticks.len() >= 2 {
-                return ticks;
-            }
-            // Less than a factor of 2.5 shown: evenly spaced values, placed on the log scale.
-            return linear_ticks(10f64.powf(lo), 10f64.powf(hi));
+            (10f64.powf(lo), 10f64.powf(hi))
+        } else {
+            (lo, hi)
         }
-        linear_ticks(lo, hi)
-    }
-}
-
-/// Round tick values inside (lo, hi), about six of them.
-fn linear_ticks(lo: f64, hi: f64) -> Vec<f64> {
-    let raw = (hi - lo) / 6.0;
-    let magnitude = 10f64.powf(raw.log10().floor());
-    let step = [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * magnitude).find(|&s| s >= raw).unwrap_or(10.0 * magnitude);
-    let first = (lo / step).ceil() as i64;
-    let last = (hi / step).floor() as i64;
-    (first..=last).map(|k| k as f64 * step).collect()
-}
-
-/// A short label for a tick value.
-fn tick_label(v: f64) -> String {
-    if v == 0.0 {
-        return "0".into();
-    }
-    let a = v.abs();
-    if (1e-3..1e5).contains(&a) {
-        let s = format!("{v:.3}");
-        let s = s.trim_end_matches('0').trim_end_matches('.');
-        s.to_string()
-    } else {
-        format!("{v:.0e}")
     }
 }
 
@@ -146,79 +96,116 @@ pub struct Chart {
     pub series: Vec<Curve>,
 }
 
+fn rgb(c: [u8; 3]) -> RGBColor {
+    RGBColor(c[0], c[1], c[2])
+}
+
 impl Chart {
-    pub fn render(&self, width: usize, height: usize) -> Image {
-        let mut img = Image::new(width, height);
+    /// Writes `path` (a `.png`), the same chart as `.svg`, and its series as `.plot.csv`.
+    pub fn save(&self, path: &Path) -> Result<(), String> {
+        let write = |path: &Path, bytes: &[u8]| {
+            write_atomically(path, bytes).map_err(|e| format!("{}: cannot be written: {e}", path.display()))
+        };
+        write(path, &self.to_png()?)?;
+        write(&path.with_extension("svg"), self.to_svg()?.as_bytes())?;
+        write(&path.with_extension("plot.csv"), self.to_csv().as_bytes())
+    }
+
+    pub fn to_svg(&self) -> Result<String, String> {
+        let mut svg = String::new();
+        self.draw(SVGBackend::with_string(&mut svg, SIZE).into_drawing_area())?;
+        Ok(svg)
+    }
+
+    pub fn to_png(&self) -> Result<Vec<u8>, String> {
+        let mut image = crate::output::image::Image::new(SIZE.0 as usize, SIZE.1 as usize);
+        self.draw(BitMapBackend::with_buffer(&mut image.pixels, SIZE).into_drawing_area())?;
+        Ok(image.to_png())
+    }
+
+    /// One row per point: the series' label, x and y, under a header of the axes' labels.
+    pub fn to_csv(&self) -> String {
+        let quote = |s: &str| format!("\"{}\"", s.replace('"', "\"\""));
+        let mut csv = format!("series,{},{}\n", quote(&self.x.label), quote(&self.y.label));
+        for s in &self.series {
+            for p in &s.points {
+                let _ = writeln!(csv, "{},{:e},{:e}", quote(&s.label), p[0], p[1]);
+            }
+        }
+        csv
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<(), String> {
+        // Both backends lay text out with the font's metrics.
+        crate::output::font::register();
         let (x0, x1) = self.x.range(self.series.iter().flat_map(|s| s.points.iter().map(|p| p[0])));
         let (y0, y1) = self.y.range(self.series.iter().flat_map(|s| s.points.iter().map(|p| p[1])));
-        let (left, right) = (MARGIN_LEFT, width as f64 - MARGIN_RIGHT);
-        let (top, bottom) = (MARGIN_TOP, height as f64 - MARGIN_BOTTOM);
-        let px = |v: f64| left + (self.x.map(v) - x0) / (x1 - x0) * (right - left);
-        let py = |v: f64| bottom - (self.y.map(v) - y0) / (y1 - y0) * (bottom - top);
-
-        for t in self.x.ticks(x0, x1) {
-            let x = px(t);
-            img.line(x, top, x, bottom, 1.0, 0.0, GRID);
-            let label = tick_label(t);
-            let w = label.len() as i64 * char_width(FONT);
-            text(&mut img, x as i64 - w / 2, bottom as i64 + 8, &label, FONT);
+        match (self.x.log, self.y.log) {
+            (false, false) => self.draw_in(root, x0..x1, y0..y1),
+            (true, false) => self.draw_in(root, (x0..x1).log_scale(), y0..y1),
+            (false, true) => self.draw_in(root, x0..x1, (y0..y1).log_scale()),
+            (true, true) => self.draw_in(root, (x0..x1).log_scale(), (y0..y1).log_scale()),
         }
-        for t in self.y.ticks(y0, y1) {
-            let y = py(t);
-            img.line(left, y, right, y, 1.0, 0.0, GRID);
-            let label = tick_label(t);
-            let w = label.len() as i64 * char_width(FONT);
-            text(&mut img, left as i64 - 6 - w, y as i64 - 5, &label, FONT);
-        }
-        img.line(left, bottom, right, bottom, 1.5, 0.0, INK);
-        img.line(left, top, left, bottom, 1.5, 0.0, INK);
+    }
 
+    fn draw_in<DB: DrawingBackend, X, Y>(&self, root: DrawingArea<DB, Shift>, x: X, y: Y) -> Result<(), String>
+    where
+        X: AsRangedCoord<Value = f64>,
+        Y: AsRangedCoord<Value = f64>,
+        X::CoordDescType: ValueFormatter<f64>,
+        Y::CoordDescType: ValueFormatter<f64>,
+    {
+        let failed = |e: DrawingAreaErrorKind<DB::ErrorType>| format!("the chart \"{}\" cannot be drawn: {e}", self.title);
+        root.fill(&WHITE).map_err(failed)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(&self.title, (FONT, 24))
+            .margin(16)
+            .x_label_area_size(56)
+            .y_label_area_size(84)
+            .build_cartesian_2d(x, y)
+            .map_err(failed)?;
+        chart
+            .configure_mesh()
+            .x_desc(&self.x.label)
+            .y_desc(&self.y.label)
+            .label_style((FONT, 15))
+            .axis_desc_style((FONT, 17))
+            .light_line_style(WHITE)
+            .draw()
+            .map_err(failed)?;
         for s in &self.series {
             let points: Vec<(f64, f64)> =
-                s.points.iter().filter(|p| self.x.usable(p[0]) && self.y.usable(p[1])).map(|p| (px(p[0]), py(p[1]))).collect();
-            if s.line != Line::None {
-                let dash = if s.line == Line::Dashed { 6.0 } else { 0.0 };
-                for w in points.windows(2) {
-                    img.line(w[0].0, w[0].1, w[1].0, w[1].1, 2.0, dash, s.color);
-                }
+                s.points.iter().filter(|p| self.x.usable(p[0]) && self.y.usable(p[1])).map(|p| (p[0], p[1])).collect();
+            let style = rgb(s.color).stroke_width(2);
+            let (line, marker) = (s.line, s.marker as i32);
+            chart
+                .draw_series(points.iter().filter(|_| marker > 0).map(|&p| Circle::new(p, marker, rgb(s.color).filled())))
+                .map_err(failed)?;
+            // The legend entry hangs on one series: the line, or an empty one for markers alone.
+            let entry = match line {
+                Line::None => chart.draw_series(std::iter::empty::<PathElement<(f64, f64)>>()),
+                Line::Solid => chart.draw_series(LineSeries::new(points, style)),
+                Line::Dashed => chart.draw_series(DashedLineSeries::new(points, 8, 6, style)),
             }
-            if s.marker > 0.0 {
-                for &(x, y) in &points {
-                    img.disc(x, y, s.marker, s.color);
-                }
-            }
+            .map_err(failed)?;
+            // Relative to the legend entry's anchor; a part the series does not draw is transparent.
+            let line_style = if line == Line::None { TRANSPARENT.into() } else { style };
+            let marker_style = if marker > 0 { style.filled() } else { TRANSPARENT.filled() };
+            entry.label(&s.label).legend(move |(x, y)| {
+                EmptyElement::at((x, y))
+                    + PathElement::new(vec![(0, 0), (24, 0)], line_style)
+                    + Circle::new((12, 0), marker.max(1), marker_style)
+            });
         }
-
-        let title_w = self.title.len() as i64 * char_width(FONT);
-        text(&mut img, (width as i64 - title_w) / 2, 14, &self.title, FONT);
-        let xw = self.x.label.len() as i64 * char_width(FONT);
-        text(&mut img, ((left + right) / 2.0) as i64 - xw / 2, height as i64 - 24, &self.x.label, FONT);
-        text_vertical(&mut img, 8, ((top + bottom) / 2.0) as i64, &self.y.label, FONT);
-
-        // Legend, top left inside the axes.
-        let row = 16.0;
-        let widest = self.series.iter().map(|s| s.label.len()).max().unwrap_or(0) as i64 * char_width(FONT);
-        let (lx, ly) = (left + 10.0, top + 8.0);
-        if !self.series.is_empty() {
-            img.rect(
-                lx as i64 - 4,
-                ly as i64 - 4,
-                lx as i64 + 40 + widest,
-                (ly + row * self.series.len() as f64) as i64,
-                [250, 250, 250],
-            );
-        }
-        for (k, s) in self.series.iter().enumerate() {
-            let y = ly + row * k as f64 + 5.0;
-            if s.line != Line::None {
-                img.line(lx, y, lx + 28.0, y, 2.0, if s.line == Line::Dashed { 6.0 } else { 0.0 }, s.color);
-            }
-            if s.marker > 0.0 {
-                img.disc(lx + 14.0, y, s.marker, s.color);
-            }
-            text(&mut img, lx as i64 + 36, y as i64 - 5, &s.label, FONT);
-        }
-        img
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .label_font((FONT, 15))
+            .background_style(WHITE.mix(0.9))
+            .border_style(RGBColor(160, 160, 160))
+            .draw()
+            .map_err(failed)?;
+        root.present().map_err(failed)
     }
 }
 
@@ -226,44 +213,40 @@ impl Chart {
 mod tests {
     use super::*;
 
-    #[test]
-    fn linear_ticks_are_round_and_inside() {
-        let ticks = Axis::linear("x").ticks(-0.03, 1.07);
-        assert_eq!(ticks.len(), 6);
-        assert!((ticks[1] - 0.2).abs() < 1e-12 && ticks[0] == 0.0);
+    fn chart(x: Axis, y: Axis) -> Chart {
+        let points = vec![[0.5, 1.0], [1.0, 100.0], [f64::NAN, 3.0]];
+        Chart { title: "T".into(), x, y, series: vec![Curve::new("a \"b\"", PALETTE[1], points)] }
     }
 
     #[test]
-    fn log_ticks_are_decades_or_their_1_2_5_steps() {
-        assert_eq!(Axis::log("x").ticks(-0.2, 3.3), vec![1.0, 10.0, 100.0, 1000.0]);
-        assert_eq!(Axis::log("x").ticks(0.1, 0.9), vec![2.0, 5.0]);
-        // 5.4 to 7.2: no 1-2-5 value inside, so evenly spaced ones.
-        let narrow = Axis::log("x").ticks(5.4f64.log10(), 7.2f64.log10());
-        assert!(narrow.len() >= 3 && narrow.iter().all(|&t| (5.4..=7.2).contains(&t)), "{narrow:?}");
+    fn a_log_axis_shows_the_positive_values_five_percent_of_the_decades_wider() {
+        let (lo, hi) = Axis::log("y").range([-1.0, 1.0, 100.0].into_iter());
+        assert!((lo.log10() + 0.1).abs() < 1e-12 && (hi.log10() - 2.1).abs() < 1e-12, "{lo} {hi}");
+        let (lo, hi) = Axis::linear("x").range([0.0, 10.0, f64::INFINITY].into_iter());
+        assert!((lo + 0.5).abs() < 1e-12 && (hi - 10.5).abs() < 1e-12);
     }
 
     #[test]
-    fn a_point_is_drawn_where_its_axes_put_it() {
-        let chart = Chart {
-            title: "T".into(),
-            x: Axis::linear("x"),
-            y: Axis::log("y"),
-            series: vec![Curve {
-                label: "s".into(),
-                color: PALETTE[1],
-                points: vec![[0.0, 1.0], [1.0, 100.0]],
-                line: Line::None,
-                marker: 3.0,
-            }],
-        };
-        let img = chart.render(400, 300);
-        // The data span maps to the axes' inner 1/1.1 (5 % padding each side).
-        let (left, right, top, bottom) = (MARGIN_LEFT, 400.0 - MARGIN_RIGHT, MARGIN_TOP, 300.0 - MARGIN_BOTTOM);
-        let x = left + (0.05 / 1.1) * (right - left);
-        let y = bottom - (0.05 / 1.1) * (bottom - top);
-        assert_eq!(img.get(x.round() as usize, y.round() as usize), PALETTE[1]);
-        let x = right - (0.05 / 1.1) * (right - left);
-        let y = top + (0.05 / 1.1) * (bottom - top);
-        assert_eq!(img.get(x.round() as usize, y.round() as usize), PALETTE[1]);
+    fn the_csv_holds_every_point_as_plotted_with_labels_quoted() {
+        let csv = chart(Axis::linear("t (s)"), Axis::log("u")).to_csv();
+        let rows: Vec<&str> = csv.lines().collect();
+        assert_eq!(rows[0], "series,\"t (s)\",\"u\"");
+        assert_eq!(rows[1], "\"a \"\"b\"\"\",5e-1,1e0");
+        assert_eq!(rows.len(), 4);
+    }
+
+    #[test]
+    fn every_combination_of_axes_draws_as_svg_and_png_with_its_labels() {
+        for (x, y) in [(false, false), (true, false), (false, true), (true, true)] {
+            let axis = |log, name: &str| if log { Axis::log(name) } else { Axis::linear(name) };
+            let c = chart(axis(x, "time"), axis(y, "speed"));
+            let svg = c.to_svg().expect("draws");
+            let texts: Vec<&str> = svg.lines().map(str::trim).collect();
+            for label in ["T", "time", "speed", "a &quot;b&quot;"] {
+                assert!(texts.contains(&label), "{label} missing from {svg}");
+            }
+            let png = c.to_png().expect("draws");
+            assert_eq!(&png[1..4], b"PNG");
+        }
     }
 }

@@ -1,8 +1,8 @@
 //! `coil preview`: particles rendered orthographically to a PNG, coloured like the paper's
 //! figures (viscosity from nu_inf to nu0) or by speed, with a colour bar.
 
-use crate::output::image::text;
 pub use crate::output::image::Image;
+use plotters::prelude::{BitMapBackend, IntoDrawingArea, RGBColor, TextStyle};
 use std::path::Path;
 
 /// Pixels right of the panels for the colour bar and its numbers.
@@ -91,10 +91,21 @@ pub fn render(position: &[[f64; 3]], value: &[f32], range: (f64, f64), view: Vie
             img.put(x, y, c);
         }
     }
-    for (y, v) in [(top, vmax), ((top + bottom) / 2, 0.5 * (vmin + vmax)), (bottom - 9, vmin)] {
-        text(&mut img, bar_left + 24, y, &format!("{v:.2e}"), 2);
-    }
+    let labels = [(top, vmax), ((top + bottom) / 2, 0.5 * (vmin + vmax)), (bottom - 12, vmin)];
+    label(&mut img, labels.map(|(y, v)| ((bar_left + 24, y), format!("{v:.2e}"))));
     img
+}
+
+/// Writes each text with its top left corner at its pixel.
+fn label<const N: usize>(img: &mut Image, texts: [((i64, i64), String); N]) {
+    crate::output::font::register();
+    let size = (img.width as u32, img.height as u32);
+    let area = BitMapBackend::with_buffer(&mut img.pixels, size).into_drawing_area();
+    let style = TextStyle::from((crate::output::font::FAMILY, 15)).color(&RGBColor(40, 40, 40));
+    for ((x, y), text) in texts {
+        // Text that does not fit is cut at the picture's edge by the backend; nothing else can fail.
+        let _ = area.draw_text(&text, &style, (x as i32, y as i32));
+    }
 }
 
 /// What the colours show.

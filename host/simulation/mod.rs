@@ -19,6 +19,7 @@ use crate::simulation::particles::{HostParticles, Particles};
 use crate::simulation::time_step::{Limit, StabilityBound, TimeStepper};
 use backend::{Backend, ParticleViews, Passes, Schedule};
 use coil_kernels::cell_grid::Neighbors;
+use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::density::{DensityArgs, Poly6, Spiky};
 use coil_kernels::diagnostics::StateFigures;
 use coil_kernels::fluid::Fluid;
@@ -151,7 +152,7 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
         };
         let ts = &scene.simulation.time_step;
         let stepper = TimeStepper {
-            bound: StabilityBound::new(h, mat.sound_speed_m_s, model.max_viscosity().to_f64()),
+            bound: StabilityBound::new(h, mat.sound_speed_m_s, model.law().max_viscosity().to_f64()),
             support_radius: h,
             safety_factor: ts.safety_factor,
             fixed: ts.fixed_s,

@@ -26,10 +26,10 @@ use coil_kernels::Real;
 pub trait Model<R: Real>: Copy + Send + Sync + 'static {
     /// The per-particle arrays the run allocates beyond the particles' state.
     const FIELDS: ModelFields;
-    /// Kinematic viscosity (m^2/s) at a shear rate (1/s), for output.
-    fn viscosity(&self, shear_rate: R) -> R;
-    /// Largest viscosity the run can reach (m^2/s), for the Eq. (10) bound.
-    fn max_viscosity(&self) -> R;
+    /// The viscosity law: its viscosity at a shear rate for output, its largest for the
+    /// Eq. (10) bound.
+    type Law: Rheology<R>;
+    fn law(&self) -> Self::Law;
     /// Velocity gradient and stress (when used), then accelerations, for all particles of
     /// `state`, run by `backend`, visiting neighbors through `N`.
     fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, state: ParticleState<'_, R, N>);
@@ -138,11 +138,9 @@ pub struct ShearThinningMorrisModel<Rh>(pub Rh);
 
 impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for StressModel<Rh> {
     const FIELDS: ModelFields = ModelFields { stress: true, viscosity: false, velocity_gradient: false };
-    fn viscosity(&self, shear_rate: R) -> R {
-        self.0.viscosity(shear_rate)
-    }
-    fn max_viscosity(&self) -> R {
-        self.0.max_viscosity()
+    type Law = Rh;
+    fn law(&self) -> Self::Law {
+        self.0
     }
     fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
         let stress = s.stress.expect("the stress operator allocates stress");
@@ -160,11 +158,9 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for StressModel<Rh> {
 
 impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for HourglassStressModel<Rh, R> {
     const FIELDS: ModelFields = ModelFields { stress: false, viscosity: true, velocity_gradient: true };
-    fn viscosity(&self, shear_rate: R) -> R {
-        self.rheology.viscosity(shear_rate)
-    }
-    fn max_viscosity(&self) -> R {
-        self.rheology.max_viscosity()
+    type Law = Rh;
+    fn law(&self) -> Self::Law {
+        self.rheology
     }
     fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
         let gradient = s.velocity_gradient.expect("hourglass control allocates the velocity gradient");
@@ -189,11 +185,9 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for HourglassStressModel<Rh, R
 
 impl<R: Real> Model<R> for LaplacianModel<R> {
     const FIELDS: ModelFields = ModelFields { stress: false, viscosity: false, velocity_gradient: false };
-    fn viscosity(&self, shear_rate: R) -> R {
-        self.0.viscosity(shear_rate)
-    }
-    fn max_viscosity(&self) -> R {
-        self.0.max_viscosity()
+    type Law = Newtonian<R>;
+    fn law(&self) -> Self::Law {
+        self.0
     }
     fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
         let mu0 = self.0.nu0 * s.fluid.rest_density;
@@ -203,11 +197,9 @@ impl<R: Real> Model<R> for LaplacianModel<R> {
 
 impl<R: Real> Model<R> for MorrisModel<R> {
     const FIELDS: ModelFields = ModelFields { stress: false, viscosity: false, velocity_gradient: false };
-    fn viscosity(&self, shear_rate: R) -> R {
-        self.0.viscosity(shear_rate)
-    }
-    fn max_viscosity(&self) -> R {
-        self.0.max_viscosity()
+    type Law = Newtonian<R>;
+    fn law(&self) -> Self::Law {
+        self.0
     }
     fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
         backend.acceleration(s.acceleration_args(MorrisViscosity { velocity: s.velocity, viscosity: self.0 }));
@@ -216,11 +208,9 @@ impl<R: Real> Model<R> for MorrisModel<R> {
 
 impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for ShearThinningMorrisModel<Rh> {
     const FIELDS: ModelFields = ModelFields { stress: false, viscosity: true, velocity_gradient: false };
-    fn viscosity(&self, shear_rate: R) -> R {
-        self.0.viscosity(shear_rate)
-    }
-    fn max_viscosity(&self) -> R {
-        self.0.max_viscosity()
+    type Law = Rh;
+    fn law(&self) -> Self::Law {
+        self.0
     }
     fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
         let viscosity = s.viscosity.expect("the shear-thinning Morris operator allocates viscosity");

@@ -121,13 +121,9 @@ fn across_gap(gap: f64, points: usize) -> Vec<f64> {
     (0..=points).map(|k| k as f64 * gap / points as f64).collect()
 }
 
-/// Writes `chart` to `path` as a PNG and returns the path for the report.
+/// Writes `chart` to `path` (PNG, with its SVG and CSV beside) and returns the path for the report.
 fn save_plot(chart: &Chart, path: &Path) -> Result<String, String> {
-    chart
-        .render(900, 640)
-        .save(path)
-        .map(|()| path.display().to_string())
-        .map_err(|e| format!("{}: cannot be written: {e}", path.display()))
+    chart.save(path).map(|()| path.display().to_string())
 }
 
 /// The start-up Poiseuille flow against Morris et al.'s series, at `across` particles over the

@@ -1,12 +1,20 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+use coil::scene::overrides::Override;
 use coil::scene::Scene;
 use std::process::{Command, Output};
 
 /// A scene from TOML text, validated like a file.
 pub fn scene(text: &str) -> Scene {
     Scene::parse(text, "test.toml").unwrap_or_else(|e| panic!("test scene invalid: {e}"))
+}
+
+/// `text` with `--set` overrides applied in order, by the code that applies the user's: each
+/// names its field, so a template that changes makes a test fail, never edits nothing.
+pub fn set(text: &str, overrides: &[&str]) -> String {
+    let overrides: Vec<Override> = overrides.iter().map(|o| Override::parse(o).expect("a key=value override")).collect();
+    coil::scene::overrides::apply(text, "test.toml", &overrides).unwrap_or_else(|e| panic!("override refused: {e}"))
 }
 
 /// A closed box of interior `box_m` (from the origin) holding a block of fluid of `fluid_m`.

@@ -1,0 +1,180 @@
+//! What the commands that do more than call the library do: report, write and print.
+
+use coil::bench::report::{chart, csv, kernels_csv, markdown};
+use coil::bench::{bench, precision_name, BenchOptions};
+use coil::output::preview::{frame_path, render_frame, Coloring, View};
+use coil::output::vtu_read::read_frame;
+use coil::output::write_atomically;
+use coil::run::{RunError, Summary};
+use coil::scene::{Scene, ViscousVelocity};
+use coil::validation::jet_axis::{AxisSample, JetAxis};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// Prints the axis offset at each frame's time and the largest; frames where nothing fell
+/// through the slab read "-".
+pub fn print_axis(dir: &Path, axis: &JetAxis, offsets: &[AxisSample]) {
+    let d = axis.diameter_m;
+    println!(
+        "{}: jet axis offset over D = {d} m, from the nozzle axis x = {} m, z = {} m, of the downward flux {} to {} m above the plate at y = {} m",
+        dir.display(),
+        axis.nozzle_xz_m[0],
+        axis.nozzle_xz_m[1],
+        0.5 * d,
+        1.5 * d,
+        axis.plate_y_m
+    );
+    println!("t (s)      offset / D");
+    for &AxisSample { time_s: t, offset_over_d } in offsets {
+        match offset_over_d {
+            Some(o) => println!("{t:<10.6} {o:.6}"),
+            None => println!("{t:<10.6} -"),
+        }
+    }
+    let largest = offsets.iter().filter_map(|s| s.offset_over_d.map(|o| (s.time_s, o))).max_by(|a, b| a.1.total_cmp(&b.1));
+    match largest {
+        Some((t, o)) => println!("largest: {o:.4} D at t = {t:.6} s (straight below 0.1 D, buckled above 0.5 D)"),
+        None => println!("largest: none; no frame has fluid falling through the slab"),
+    }
+}
+
+/// Prints how a run or a resumed run ended, and its exit code: 0 done, 2 bad input, 1 output
+/// or device failure, 3 unstable, 130 interrupted.
+pub fn finish_run(result: Result<Summary, RunError>, out_dir: &Path) -> ExitCode {
+    match result {
+        Ok(summary) => {
+            println!("{summary}");
+            match &summary.series {
+                Some(series) => println!("frames in {} (open {} in ParaView)", out_dir.display(), series.display()),
+                None => println!("frames in {}", out_dir.display()),
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            match &e {
+                RunError::Interrupted(_) => eprintln!("`coil resume {}` continues it", out_dir.display()),
+                RunError::Unstable(i, _) => {
+                    eprintln!(
+                        "`coil resume {} --set simulation.time_step.fixed_s={:.3e}` continues it from its last frame with a smaller dt",
+                        out_dir.display(),
+                        (0.5 * i.dt_s).min(i.stability_bound_s)
+                    );
+                    if i.viscous_velocity == ViscousVelocity::FullStep {
+                        eprintln!(
+                            "`coil resume {} --set simulation.time_step.viscous_velocity=half_step` continues it at the same dt, the viscous terms reading the half-step velocity, which leap-frog keeps stable to twice the damping rate (docs/tradeoff.md)",
+                            out_dir.display()
+                        );
+                    }
+                }
+                _ => {}
+            }
+            ExitCode::from(match e {
+                RunError::Scene(_) | RunError::Backend(_) => 2,
+                RunError::Io(_) | RunError::Device(..) => 1,
+                RunError::Unstable(..) => 3,
+                RunError::Interrupted(_) => 130,
+            })
+        }
+    }
+}
+
+/// `coil bench`: measures, prints the Markdown table and writes the report files.
+pub fn bench_command(options: &BenchOptions, out: &Path) -> Result<(), String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("--out: {} cannot be created: {e}", out.display()))?;
+    let report = bench(options, |m| {
+        eprintln!(
+            "{:>4} {} {:<4}: {} fluid + {} boundary particles, median {:.3} ms per step over {} steps",
+            m.size.label,
+            precision_name(m.precision),
+            m.backend.name(),
+            m.fluid,
+            m.boundary,
+            m.median_ms,
+            m.steps
+        )
+    })?;
+    let text = markdown(&report, options);
+    let write = |name: &str, bytes: &[u8]| {
+        let path = out.join(name);
+        write_atomically(&path, bytes).map_err(|e| format!("{}: cannot be written: {e}", path.display()))
+    };
+    write("bench.md", text.as_bytes())?;
+    write("bench.csv", csv(&report).as_bytes())?;
+    write("kernels.csv", kernels_csv(&report).as_bytes())?;
+    chart(&report).save(&out.join("bench.png"))?;
+    println!("{text}");
+    println!("report in {}", out.display());
+    Ok(())
+}
+
+/// `coil tradeoff`: runs the sweeps and writes the table and the plot, of the trials measured
+/// before a failure where one ended the sweep.
+pub fn tradeoff_command(quick: bool, repeats: usize, out: &Path) -> Result<(), String> {
+    use coil::validation::tradeoff::{chart, csv, markdown, run, trials};
+    std::fs::create_dir_all(out).map_err(|e| format!("--out: {} cannot be created: {e}", out.display()))?;
+    let sweep = run(trials(quick), repeats);
+    let measured = sweep.measured;
+    let write = |name: &str, bytes: &[u8]| {
+        let path = out.join(name);
+        write_atomically(&path, bytes).map_err(|e| format!("{}: cannot be written: {e}", path.display()))
+    };
+    write("tradeoff.md", markdown(&measured).as_bytes())?;
+    write("tradeoff.csv", csv(&measured).as_bytes())?;
+    chart(&measured).save(&out.join("tradeoff.png"))?;
+    match sweep.failure {
+        None => {
+            println!("table and plot in {}", out.display());
+            Ok(())
+        }
+        Some(e) => {
+            Err(format!("the sweep ended at {e}; the {} trials measured before it are in {}", measured.len(), out.display()))
+        }
+    }
+}
+
+pub fn list_scenes(dir: &Path) -> Result<ExitCode, String> {
+    let entries = std::fs::read_dir(dir).map_err(|e| {
+        format!("{}: cannot be read: {e} (run from the repository root, or give the scenes folder)", dir.display())
+    })?;
+    let mut paths: Vec<PathBuf> =
+        entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|x| x == "toml")).collect();
+    paths.sort();
+    let mut status = ExitCode::SUCCESS;
+    for path in paths {
+        match Scene::load(&path) {
+            Ok(scene) => {
+                println!("{:<32} {}", path.display(), scene.description);
+                for v in &scene.variants {
+                    let sets: String = v.set.iter().map(|s| format!(" --set {s}")).collect();
+                    println!("  {:<30} {}\n  {:<30} coil run {}{sets}", v.name, v.description, "", path.display());
+                }
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                status = ExitCode::from(2);
+            }
+        }
+    }
+    Ok(status)
+}
+
+/// `coil preview`: renders the frame `path` names and returns the PNG written.
+pub fn preview(
+    path: &Path,
+    view: View,
+    coloring: Coloring,
+    range: Option<(f64, f64)>,
+    size: usize,
+    output: Option<PathBuf>,
+) -> Result<PathBuf, String> {
+    if !(16..=8192).contains(&size) {
+        return Err(format!("--size: must be 16 to 8192 pixels, got {size}"));
+    }
+    let file = frame_path(path)?;
+    let frame = read_frame(&file)?;
+    let image = render_frame(&frame, view, coloring, range, size).map_err(|e| format!("{}: {e}", file.display()))?;
+    let png = output.unwrap_or_else(|| file.with_extension("png"));
+    image.save(&png).map_err(|e| format!("{}: cannot be written: {e}", png.display()))?;
+    Ok(png)
+}

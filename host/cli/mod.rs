@@ -1,0 +1,4 @@
+//! The `coil` command line: its arguments and the commands behind them.
+
+pub mod args;
+pub mod commands;
