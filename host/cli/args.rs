@@ -114,7 +114,8 @@ pub enum Command {
     },
     /// Reproduce the paper's Table I: the dam break at 1K to 1M fluid particles, median ms per
     /// step on the CPU and a CUDA GPU in f32 and f64, beside the paper's figures. Writes
-    /// bench.md, bench.csv, kernels.csv (GPU kernel times from CUDA events) and bench.png.
+    /// bench.md, bench.csv, kernels.csv (GPU kernel times from CUDA events) and the plot as
+    /// bench.png, bench.svg and bench.plot.csv.
     Bench {
         /// Table I sizes to run, comma-separated: 1K,4K,16K,64K,128K,256K,1M.
         #[arg(long, value_delimiter = ',', default_value = "1K,4K,16K,64K,128K,256K,1M")]
@@ -148,7 +149,7 @@ pub enum Command {
     /// 1997 with each viscosity operator, steady Poiseuille flow of Cross fluids, a hydrostatic
     /// tank, the Taylor-Green vortex, the spreading torus of Fig. 3, Huppert's viscous
     /// spreading, and jet buckling from high and low nozzles), print each error next to its
-    /// tolerance, and write PNG plots of simulated against reference profiles. Exits 1 when a
+    /// tolerance, and plot simulated against reference profiles (PNG, SVG, CSV). Exits 1 when a
     /// binding case fails; the paper's operator below the binding resolution and on the Cross
     /// cases is shown for comparison.
     Validate {
@@ -166,8 +167,8 @@ pub enum Command {
     /// Measure what each speed-for-accuracy knob buys on the two Poiseuille cases (resolution,
     /// operator, dt safety factor, the velocity the viscous terms read, sound speed, precision,
     /// walls, density kernel): error against the reference and the median wall time of each
-    /// trial's repeats; writes tradeoff.md, tradeoff.csv and tradeoff.png (error against time,
-    /// the Pareto front drawn).
+    /// trial's repeats; writes tradeoff.md, tradeoff.csv and the plot of error against time, the
+    /// Pareto front drawn (tradeoff.png, .svg, .plot.csv).
     Tradeoff {
         /// A few coarse trials (about 13 s a repeat) instead of the full sweep (about 5 minutes a
         /// repeat, on 2 cores).
