@@ -248,7 +248,7 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
         }
         overrides.push(crate::scene::overrides::Override::parse(given).map_err(RunError::Scene)?);
     }
-    let scene = Scene::load_with(&log_path, &overrides).map_err(RunError::Scene)?;
+    let scene = Scene::from_log(&log, &log_path, &overrides).map_err(RunError::Scene)?;
     let checkpoint_path = dir.join(folder::CHECKPOINT);
     let mut checkpoint = Checkpoint::read(&checkpoint_path).map_err(|e| bad(&checkpoint_path, "(file)", e))?;
     if checkpoint.fingerprint != checkpoint::fingerprint(&scene) {

@@ -472,17 +472,21 @@ pub enum NozzleMotion {
 /// The TOML text of a scene file; a `run.json` gives its `scene`, written back as TOML.
 fn scene_text(path: &Path) -> Result<String, SceneError> {
     if path.extension().is_some_and(|x| x == "json") {
-        let scene = crate::run::run_log::RunLog::read(path)?.scene;
-        return toml::to_string(&scene).map_err(|e| SceneError {
-            file: path.display().to_string(),
-            field: "scene".into(),
-            reason: e.to_string(),
-        });
+        return logged_scene_text(&crate::run::run_log::RunLog::read(path)?, path);
     }
     std::fs::read_to_string(path).map_err(|e| SceneError {
         file: path.display().to_string(),
         field: "(file)".into(),
         reason: format!("cannot be read: {e}"),
+    })
+}
+
+/// The scene a run log holds, as TOML; `path` names the log in errors.
+fn logged_scene_text(log: &crate::run::run_log::RunLog, path: &Path) -> Result<String, SceneError> {
+    toml::to_string(&log.scene).map_err(|e| SceneError {
+        file: path.display().to_string(),
+        field: "scene".into(),
+        reason: e.to_string(),
     })
 }
 
@@ -529,12 +533,20 @@ impl Scene {
 
     /// Reads a scene file, applies `--set` overrides in order, and validates the result as one.
     pub fn load_with(path: &Path, overrides: &[Override]) -> Result<Scene, SceneError> {
-        let file = path.display().to_string();
-        let text = scene_text(path)?;
+        Self::with_overrides(&scene_text(path)?, &path.display().to_string(), overrides)
+    }
+
+    /// The scene of a run log read from `path`, with `--set` overrides applied in order and
+    /// validated as one.
+    pub fn from_log(log: &crate::run::run_log::RunLog, path: &Path, overrides: &[Override]) -> Result<Scene, SceneError> {
+        Self::with_overrides(&logged_scene_text(log, path)?, &path.display().to_string(), overrides)
+    }
+
+    fn with_overrides(text: &str, file: &str, overrides: &[Override]) -> Result<Scene, SceneError> {
         if overrides.is_empty() {
-            return Self::parse(&text, &file);
+            return Self::parse(text, file);
         }
-        Self::parse(&overrides::apply(&text, &file, overrides)?, &format!("{file} with --set")).map_err(|mut e| {
+        Self::parse(&overrides::apply(text, file, overrides)?, &format!("{file} with --set")).map_err(|mut e| {
             // Line numbers would point into the rewritten text, not the user's file.
             if let Some(at) = e.reason.find(" (at line ") {
                 e.reason.truncate(at);
