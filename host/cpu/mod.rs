@@ -5,7 +5,7 @@ pub mod neighbor_grid;
 pub mod parallel;
 
 use crate::cpu::neighbor_grid::NeighborGrid;
-use crate::cpu::parallel::launch;
+use crate::cpu::parallel::{launch, on_worker};
 use crate::simulation::backend::{Backend, ParticleViews, Passes, Readout, Schedule};
 use crate::simulation::particles::{
     mat3_view_mut, stress_view_mut, vec3_view, vec3_view_mut, view_mut, HostParticles, Particles,
@@ -89,6 +89,12 @@ impl<R: Real> CpuBackend<R> {
 
 impl<R: Real> Backend<R> for CpuBackend<R> {
     type Fault = Infallible;
+
+    /// A worker of rayon's pool, so that each pass forks from it instead of handing its job to
+    /// the pool from outside.
+    fn on_launch_thread<T: Send>(step: impl FnOnce() -> T + Send) -> T {
+        on_worker(step)
+    }
 
     fn periodic(&self) -> Option<Periodic> {
         self.host.grid.is_periodic().then_some(self.host.grid.periodic)

@@ -266,11 +266,6 @@ impl<R: Real, M: Model<R>> Simulation<R, M, CudaBackend<R>> {
         sim.sort_and_density()?;
         Ok(sim)
     }
-
-    /// The particles as the last [`Simulation::sync`] copied them from the device.
-    pub fn particles(&self) -> &Particles<R> {
-        &self.backend.mirror.particles
-    }
 }
 
 pub struct CudaBackend<R: Real> {

@@ -29,12 +29,6 @@ impl Image {
         }
     }
 
-    /// The colour of one pixel.
-    pub fn get(&self, x: usize, y: usize) -> [u8; 3] {
-        let k = 3 * (y * self.width + x);
-        [self.pixels[k], self.pixels[k + 1], self.pixels[k + 2]]
-    }
-
     pub fn disc(&mut self, cx: f64, cy: f64, r: f64, c: [u8; 3]) {
         let ri = r.ceil() as i64;
         let (x0, y0) = (cx.round() as i64, cy.round() as i64);

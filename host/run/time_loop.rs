@@ -152,7 +152,7 @@ fn drive<R: Real, M: Model<R>, B: Backend<R>>(
     Ok(summary(&sim.run, &tally))
 }
 
-/// The wall-clock boundary particles, written once per run for ParaView to show beside the frames.
+/// The wall particles, written once per run for ParaView to show beside the frames.
 fn write_boundary(scene: &Scene, initial: &InitialParticles, dir: &std::path::Path) -> Result<(), RunError> {
     let mut bytes = Vec::new();
     let path = dir.join(folder::BOUNDARY);

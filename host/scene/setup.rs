@@ -158,7 +158,7 @@ pub fn initial_particles_within(scene: &Scene, file: &str, limit: &ParticleLimit
                 }));
             }
         }
-        if let Some(q) = p.boundary[before..].iter().find(|q| !inside(scene, **q)) {
+        if let Some(q) = p.boundary[before..].iter().find(|q| !scene.domain.contains(**q)) {
             return Err(err(
                 format!("boundary[{k}]"),
                 format!("its {layers} wall layers reach {q:?}, outside the domain box; enlarge the domain"),
@@ -231,10 +231,6 @@ pub fn initial_particles_within(scene: &Scene, file: &str, limit: &ParticleLimit
         }
     }
     Ok(p)
-}
-
-fn inside(scene: &Scene, q: [f64; 3]) -> bool {
-    (0..3).all(|a| q[a] >= scene.domain.min_m[a] && q[a] <= scene.domain.max_m[a])
 }
 
 /// The first of `fluid` closer than s/2 to a boundary particle.

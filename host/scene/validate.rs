@@ -9,8 +9,8 @@ impl Scene {
     pub(super) fn validate(&self, file: &str) -> Result<(), SceneError> {
         let check = Check { file };
         check.material(&self.material)?;
-        check.domain(&self.domain, &self.material)?;
-        check.simulation(&self.simulation, &self.material)?;
+        check.domain(&self.domain, &self.material, self.support_radius())?;
+        check.simulation(&self.simulation, &self.material, self.support_radius())?;
         check.output(&self.output)?;
         check.fluid(self)?;
         check.boundaries(&self.boundaries, &self.domain)?;
@@ -89,13 +89,13 @@ impl Check<'_> {
         Ok(())
     }
 
-    fn domain(&self, d: &Domain, m: &Material) -> Checked {
+    /// `h`: the support radius (m).
+    fn domain(&self, d: &Domain, m: &Material, h: f64) -> Checked {
         for a in 0..3 {
             if !(d.min_m[a] < d.max_m[a]) || !d.min_m[a].is_finite() || !d.max_m[a].is_finite() {
                 return self.fail("domain.max_m", format!("must exceed domain.min_m on every axis (axis {a})"));
             }
         }
-        let h = m.particle_spacing_m * m.support_radius_factor;
         let cells: f64 = (0..3).map(|a| ((d.max_m[a] - d.min_m[a]) / h).ceil()).product();
         if cells > 2.0e8 {
             return self.fail(
@@ -128,7 +128,8 @@ impl Check<'_> {
         Ok(())
     }
 
-    fn simulation(&self, s: &SimulationSettings, m: &Material) -> Checked {
+    /// `h`: the support radius (m).
+    fn simulation(&self, s: &SimulationSettings, m: &Material, h: f64) -> Checked {
         self.positive("simulation.end_time_s", s.end_time_s)?;
         let ts = &s.time_step;
         self.positive("simulation.time_step.safety_factor", ts.safety_factor)?;
@@ -144,7 +145,6 @@ impl Check<'_> {
         }
         if let Some(dt) = ts.fixed_s {
             self.positive("simulation.time_step.fixed_s", dt)?;
-            let h = m.particle_spacing_m * m.support_radius_factor;
             let (limit_dt, limit) = StabilityBound::new(h, m.sound_speed_m_s, m.viscosity.nu0_m2_s).dt();
             if dt > limit_dt && !ts.allow_above_stability_bound {
                 return self.fail(

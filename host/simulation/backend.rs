@@ -85,6 +85,11 @@ pub trait Backend<R: Real>: Send {
     /// Why a pass could not run (the CPU's never fail).
     type Fault: Display + Send;
 
+    /// Runs `step`, which launches this backend's passes, on the thread they launch from best.
+    fn on_launch_thread<T: Send>(step: impl FnOnce() -> T + Send) -> T {
+        step()
+    }
+
     /// The domain's periods, or `None` for an open domain.
     fn periodic(&self) -> Option<Periodic>;
 

@@ -9,7 +9,6 @@ pub mod run_state;
 pub mod time_step;
 
 use crate::cpu::neighbor_grid::NeighborGrid;
-use crate::cpu::parallel::on_worker;
 use crate::cpu::CpuBackend;
 use crate::scene::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, InitialParticles};
 use crate::scene::{DensityKernelKind, Scene, ViscousVelocity, Walls};
@@ -222,11 +221,6 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
         Self { run, backend }
     }
 
-    /// The particles in their current order.
-    pub fn particles(&self) -> &Particles<R> {
-        &self.backend.host().particles
-    }
-
     /// The particles, to set a state by hand (checks, tests).
     pub fn particles_mut(&mut self) -> &mut Particles<R> {
         self.backend.particles_mut()
@@ -259,7 +253,7 @@ impl<R: Real, M: Model<R>, B: Backend<R>> Simulation<R, M, B> {
 
     /// One step of Algorithm 1 with a given dt (s).
     pub fn step_with(&mut self, dt: f64, limit: Limit) -> Result<(), StepError<B::Fault>> {
-        on_worker(|| {
+        B::on_launch_thread(|| {
             // Line 1: inject.
             let (staging, room) = self.backend.inlet_staging();
             let added = self.run.inject(dt, room, staging);
@@ -298,6 +292,11 @@ impl<R: Real, M: Model<R>, B: Backend<R>> Simulation<R, M, B> {
     /// The particles in host memory and their grid (current after [`Self::sync`]).
     pub fn host(&self) -> &HostParticles<R> {
         self.backend.host()
+    }
+
+    /// The particles in host memory, in their current order (current after [`Self::sync`]).
+    pub fn particles(&self) -> &Particles<R> {
+        &self.backend.host().particles
     }
 
     /// Whether the run state holds everything the next step reads (a device's figures and
