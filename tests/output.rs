@@ -362,7 +362,7 @@ fn resume_refuses_what_it_cannot_continue() {
     std::fs::write(&checkpoint, &whole[..whole.len() / 2]).expect("cut");
     refused("checkpoint.bin: (file): is damaged or cut short");
     std::fs::remove_file(&checkpoint).expect("removed");
-    refused("checkpoint.bin: (file): cannot be read");
+    refused("checkpoint.bin: (file): is missing");
     std::fs::write(&checkpoint, &whole).expect("put back");
     let log = std::fs::read_to_string(out.join("run.json")).expect("log");
     std::fs::write(out.join("run.json"), log.replace("\"nu0_m2_s\": 0.05", "\"nu0_m2_s\": 0.06")).expect("edited");

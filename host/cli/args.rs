@@ -108,8 +108,8 @@ pub enum Command {
         /// Worker threads [default: all cores].
         #[arg(long)]
         threads: Option<usize>,
-        /// Seconds of calibration run.
-        #[arg(long, default_value_t = 2.0)]
+        /// Seconds of calibration run (more than 0, at most 3600).
+        #[arg(long, default_value_t = 2.0, value_parser = calibration_seconds)]
         calibrate_s: f64,
     },
     /// Reproduce the paper's Table I: the dam break at 1K to 1M fluid particles, median ms per
@@ -247,5 +247,15 @@ impl PrecisionArg {
             PrecisionArg::F32 => Precision::F32,
             PrecisionArg::F64 => Precision::F64,
         }
+    }
+}
+
+/// A calibration time (s): a positive, finite number of at most an hour.
+fn calibration_seconds(text: &str) -> Result<f64, String> {
+    let s: f64 = text.trim().parse().map_err(|e| format!("{e}"))?;
+    if s > 0.0 && s <= 3600.0 {
+        Ok(s)
+    } else {
+        Err(format!("must be more than 0 and at most 3600 seconds, got {text}"))
     }
 }

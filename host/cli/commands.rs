@@ -54,7 +54,8 @@ pub fn finish_run(result: Result<Summary, RunError>, out_dir: &Path) -> ExitCode
             eprintln!("error: {e}");
             match &e {
                 RunError::Interrupted(_) => eprintln!("`coil resume {}` continues it", out_dir.display()),
-                RunError::Unstable(i, _) => {
+                // Advice to resume needs a frame to resume from and a dt to halve.
+                RunError::Unstable(i, summary) if summary.frames > 0 && i.dt_s > 0.0 => {
                     eprintln!(
                         "`coil resume {} --set simulation.time_step.fixed_s={:.3e}` continues it from its last frame with a smaller dt",
                         out_dir.display(),

@@ -72,6 +72,27 @@ impl Frame {
         }
     }
 
+    /// How many particles hold a value that is not finite, and the first such value (its
+    /// field, the particle's id, the value), or `None` where every value is finite.
+    pub fn non_finite(&self) -> Option<(usize, String)> {
+        let bad = |k: usize| -> Option<(&str, f64)> {
+            let scalars = [
+                ("density", self.density[k]),
+                ("pressure", self.pressure[k]),
+                ("viscosity", self.viscosity[k]),
+                ("shear_rate", self.shear_rate[k]),
+            ];
+            let vectors = self.position[k]
+                .iter()
+                .map(|&x| ("position", x))
+                .chain(self.velocity[k].iter().map(|&v| ("velocity", f64::from(v))));
+            scalars.into_iter().map(|(name, v)| (name, f64::from(v))).chain(vectors).find(|(_, v)| !v.is_finite())
+        };
+        let mut found = (0..self.id.len()).filter_map(|k| bad(k).map(|b| (k, b)));
+        let (k, (field, value)) = found.next()?;
+        Some((1 + found.count(), format!("{field} of particle {} is {value}", self.id[k])))
+    }
+
     /// The frame as a binary `.ply` file's bytes.
     pub fn to_ply(&mut self) -> &[u8] {
         let scalars = [

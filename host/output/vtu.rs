@@ -150,12 +150,10 @@ pub struct PvdSeries {
 }
 
 impl PvdSeries {
-    /// A series with room for `capacity` frames that already lists `earlier`: (time (s), file)
-    /// of the frames a resumed run wrote before it stopped.
-    pub fn new(path: PathBuf, capacity: usize, earlier: Vec<(f64, String)>) -> Self {
-        let mut entries = earlier;
-        entries.reserve(capacity.saturating_sub(entries.len()));
-        Self { path, entries }
+    /// A series that already lists `earlier`: (time (s), file) of the frames a resumed run
+    /// wrote before it stopped. It grows a frame at a time, never by the run's length.
+    pub fn new(path: PathBuf, earlier: Vec<(f64, String)>) -> Self {
+        Self { path, entries: earlier }
     }
 
     /// Records a frame file (relative to the series file) at simulated time `t` (s) and

@@ -13,7 +13,7 @@
 //! fingerprint, the fields in the order `write` gives them, and an FNV-1a checksum of all the
 //! bytes before it, so a damaged file is refused rather than misread.
 
-use super::summary::Tally;
+use super::summary::{Tally, WrittenFile};
 use crate::scene::Scene;
 use crate::simulation::model::Model;
 use crate::simulation::particles::Particles;
@@ -23,11 +23,12 @@ use coil_kernels::Real;
 use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"COILCKPT";
-/// 2: the fingerprint hashes the [`PHYSICS`] fields only.
-const FORMAT_VERSION: u32 = 2;
+/// 2: the fingerprint hashes the [`PHYSICS`] fields only. 3: the frame files' sizes and
+/// digests.
+const FORMAT_VERSION: u32 = 3;
 
 /// FNV-1a, 64 bits: the same value on every machine and Rust version, unlike std's hasher.
-fn fnv1a(bytes: &[u8]) -> u64 {
+pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
 }
 
@@ -231,6 +232,13 @@ pub fn encode<R: Real, M: Model<R>>(sim: &RunState<R, M>, p: &Particles<R>, scen
     }
     w.u64(tally.frame_times.len() as u64);
     w.f64s(&tally.frame_times);
+    w.u64(tally.frame_files.len() as u64);
+    for file in &tally.frame_files {
+        w.u64(file.name.len() as u64);
+        w.0.extend_from_slice(file.name.as_bytes());
+        w.u64(file.bytes);
+        w.u64(file.digest);
+    }
     w.f64(tally.next_frame_time);
     w.f64(tally.particle_steps);
     w.f64(tally.max_compression);
@@ -314,8 +322,18 @@ impl Checkpoint {
             (0..inlet_count).map(|_| Ok((r.f64("an inlet")?, r.u64("an inlet")?))).collect::<Result<Vec<_>, String>>()?;
         let frame_count = r.count(8, "frames")?;
         let frame_times = (0..frame_count).map(|_| r.f64("the frame times")).collect::<Result<Vec<_>, _>>()?;
+        let file_count = r.count(24, "frame files")?;
+        let frame_files = (0..file_count)
+            .map(|_| {
+                let length = r.count(1, "a frame file's name")?;
+                let name = String::from_utf8(r.take(length, "a frame file's name")?.to_vec())
+                    .map_err(|_| "gives a frame file's name that is not UTF-8".to_string())?;
+                Ok(WrittenFile { name, bytes: r.u64("a frame file's size")?, digest: r.u64("a frame file's digest")? })
+            })
+            .collect::<Result<Vec<_>, String>>()?;
         let tally = Tally {
             frame_times,
+            frame_files,
             next_frame_time: r.f64("the frame schedule")?,
             particle_steps: r.f64("the summary's figures")?,
             max_compression: r.f64("the summary's figures")?,

@@ -10,6 +10,20 @@ pub const CHECKPOINT: &str = "checkpoint.bin";
 /// The wall particles, written once.
 pub const BOUNDARY: &str = "boundary.vtu";
 
+/// Held (an advisory file lock) by the run writing into the folder, so that no two share it.
+pub const LOCK: &str = "run.lock";
+
+/// Takes output folder `dir` for this process until the returned file is dropped; `Ok(None)`
+/// where another process holds it.
+pub fn lock(dir: &Path) -> io::Result<Option<std::fs::File>> {
+    let file = std::fs::OpenOptions::new().create(true).truncate(false).write(true).open(dir.join(LOCK))?;
+    match file.try_lock() {
+        Ok(()) => Ok(Some(file)),
+        Err(std::fs::TryLockError::WouldBlock) => Ok(None),
+        Err(std::fs::TryLockError::Error(e)) => Err(e),
+    }
+}
+
 /// Frame `k`'s `.vtu` file name; its other formats take the same stem.
 pub fn frame_name(k: usize) -> String {
     format!("frame_{k:06}.vtu")

@@ -2,6 +2,7 @@
 //! and its entry in the `.pvd` series.
 
 use super::folder::{frame_name, series_path};
+use super::summary::WrittenFile;
 use super::{io_error, RunError, Tally};
 use crate::output::frame::Frame;
 use crate::output::preview::{own_range, render, speeds, Coloring, View};
@@ -10,7 +11,7 @@ use crate::output::write_atomically;
 use crate::scene::{FrameFormat, Scene};
 use crate::simulation::model::Model;
 use crate::simulation::particles::HostParticles;
-use crate::simulation::RunState;
+use crate::simulation::{Instability, RunState};
 use coil_kernels::Real;
 use std::path::{Path, PathBuf};
 
@@ -29,10 +30,9 @@ pub struct FrameWriter<'a> {
 impl<'a> FrameWriter<'a> {
     /// A writer that continues the series after the frames `tally` already counts.
     pub fn new(scene: &'a Scene, dir: &'a Path, preview: bool, tally: &Tally) -> Self {
-        let expected_frames = scene.output.every_s.map(|e| (scene.simulation.end_time_s / e).ceil() as usize + 1).unwrap_or(1024);
         let series = scene.output.formats.contains(&FrameFormat::Vtu).then(|| {
             let listed = tally.frame_times.iter().enumerate().map(|(k, &t)| (t, frame_name(k))).collect();
-            PvdSeries::new(series_path(dir, &scene.name), expected_frames, listed)
+            PvdSeries::new(series_path(dir, &scene.name), listed)
         });
         Self { scene, dir, preview, series, frame: Frame::default() }
     }
@@ -42,15 +42,19 @@ impl<'a> FrameWriter<'a> {
         self.series.as_ref().map(|s| s.path().to_path_buf())
     }
 
-    /// Writes the next frame and counts it in `tally`.
-    pub fn write<R: Real, M: Model<R>>(
-        &mut self,
-        run: &RunState<R, M>,
-        host: &HostParticles<R>,
-        tally: &mut Tally,
-    ) -> Result<(), RunError> {
-        let output = &self.scene.output;
+    /// Gathers the next frame from the run; refuses, as an instability, a frame with a value
+    /// that is not finite, so that none is ever written.
+    pub fn capture<R: Real, M: Model<R>>(&mut self, run: &RunState<R, M>, host: &HostParticles<R>) -> Result<(), Instability> {
         self.frame.capture(run, host);
+        match self.frame.non_finite() {
+            None => Ok(()),
+            Some((particles, what)) => Err(run.instability(particles, Some(what))),
+        }
+    }
+
+    /// Writes the frame last captured, at simulated time `time` (s), and counts it in `tally`.
+    pub fn write(&mut self, time: f64, tally: &mut Tally) -> Result<(), RunError> {
+        let output = &self.scene.output;
         let name = frame_name(tally.frame_times.len());
         let path = self.dir.join(&name);
         for format in &output.formats {
@@ -60,14 +64,16 @@ impl<'a> FrameWriter<'a> {
                 FrameFormat::Xyz => (path.with_extension("xyz"), self.frame.to_xyz()),
             };
             write_atomically(&file, bytes).map_err(|e| io_error("frame", &file, e))?;
+            let name = file.file_name().expect("a frame file has a name").to_string_lossy().into_owned();
+            tally.frame_files.push(WrittenFile::of(name, bytes));
         }
         if self.preview {
             self.write_preview(&path.with_extension("png"))?;
         }
         if let Some(series) = &mut self.series {
-            series.push(run.time, &name).map_err(|e| io_error("series", series.path(), e))?;
+            series.push(time, &name).map_err(|e| io_error("series", series.path(), e))?;
         }
-        tally.frame_times.push(run.time);
+        tally.frame_times.push(time);
         Ok(())
     }
 

@@ -144,6 +144,17 @@ struct Resumption {
     checkpoint: Checkpoint,
     /// Where it was resumed before, from its `run.json`.
     earlier: Vec<Resumed>,
+    /// The lock on its output folder, held from before the folder was read.
+    _lock: std::fs::File,
+}
+
+/// Takes output folder `dir` for this run, or refuses it (naming `field` of `file`) where
+/// another run holds it.
+fn lock_folder(dir: &Path, file: &str, field: &str) -> Result<std::fs::File, RunError> {
+    let error = |reason: String| RunError::Scene(SceneError { file: file.into(), field: field.into(), reason });
+    folder::lock(dir)
+        .map_err(|e| error(format!("output folder {} cannot be locked: {e}", dir.display())))?
+        .ok_or_else(|| error(format!("output folder {} is in use by another coil run", dir.display())))
 }
 
 /// Runs `scene` from t = 0, or from `resumption`'s checkpoint into the folder that holds it.
@@ -155,20 +166,22 @@ fn execute(
     resumption: Option<Resumption>,
 ) -> Result<Summary, RunError> {
     let precision = options.precision.unwrap_or(scene.simulation.precision);
+    scene.check_precision(precision, scene_file).map_err(RunError::Scene)?;
     let mut scene = scene.clone();
     scene.simulation.precision = precision;
     let scene = &scene;
     let initial = initial_particles(scene, scene_file).map_err(RunError::Scene)?;
+    let folder_error = |reason: String| RunError::Scene(SceneError { file: scene_file.into(), field: "--out".into(), reason });
+    let dir = &options.out_dir;
+    std::fs::create_dir_all(dir).map_err(|e| folder_error(format!("output folder {} cannot be created: {e}", dir.display())))?;
+    // A resumed run holds the lock already, taken before it read the folder.
+    let _lock = match resumption {
+        Some(_) => None,
+        None => Some(lock_folder(dir, scene_file, "--out")?),
+    };
     if resumption.is_none() {
         clear_earlier_run(scene_file, options)?;
     }
-    std::fs::create_dir_all(&options.out_dir).map_err(|e| {
-        RunError::Scene(SceneError {
-            file: scene_file.into(),
-            field: "--out".into(),
-            reason: format!("output folder {} cannot be created: {e}", options.out_dir.display()),
-        })
-    })?;
     let mut resumed = resumption.as_ref().map(|r| r.earlier.clone()).unwrap_or_default();
     if let Some(r) = &resumption {
         resumed.push(Resumed { step: r.checkpoint.steps, time_s: r.checkpoint.time });
@@ -197,8 +210,14 @@ fn execute(
         Err(e @ RunError::Interrupted(summary)) => (Status::Interrupted, Some(e.to_string()), Some(Summary::clone(summary))),
         Err(e) => (Status::Failed, Some(e.to_string()), None),
     };
-    log.write(&options.out_dir).map_err(|e| io_error("run log", &log_path, e))?;
-    result
+    match (log.write(&options.out_dir), result) {
+        (Ok(()), result) => result,
+        (Err(e), Ok(_)) => Err(io_error("run log", &log_path, e)),
+        // The run's own failure comes first; a full disk typically fails both.
+        (Err(e), Err(failure)) => {
+            Err(RunError::Io(format!("{failure}\nThe run log {} could not record it either: {e}", log_path.display())))
+        }
+    }
 }
 
 /// How `coil resume` goes on.
@@ -230,6 +249,7 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
     if !log_path.is_file() {
         return Err(bad(&log_path, "(file)", format!("is missing: {} is not the output folder of a coil run", dir.display())));
     }
+    let lock = lock_folder(dir, &dir.display().to_string(), "(folder)")?;
     let log = RunLog::read(&log_path).map_err(RunError::Scene)?;
     let mut overrides = Vec::new();
     for given in &options.set {
@@ -250,6 +270,16 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
     }
     let scene = Scene::from_log(&log, &log_path, &overrides).map_err(RunError::Scene)?;
     let checkpoint_path = dir.join(folder::CHECKPOINT);
+    if !checkpoint_path.is_file() {
+        return Err(bad(
+            &checkpoint_path,
+            "(file)",
+            format!(
+                "is missing: the run stopped before it saved its first frame, so there is nothing to resume; start it again with `{}`",
+                rerun(&log, dir)
+            ),
+        ));
+    }
     let mut checkpoint = Checkpoint::read(&checkpoint_path).map_err(|e| bad(&checkpoint_path, "(file)", e))?;
     if checkpoint.fingerprint != checkpoint::fingerprint(&scene) {
         return Err(bad(
@@ -270,6 +300,7 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
         };
         return Err(bad(&log_path, "simulation.end_time_s", reason));
     }
+    verify_frames(dir, &checkpoint.tally.frame_files, &log)?;
     let mut all_overrides = log.overrides;
     all_overrides.extend(options.set.iter().cloned());
     remove_frames_from(dir, checkpoint.tally.frame_times.len())?;
@@ -283,7 +314,38 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
         overwrite: false,
         stop: options.stop,
     };
-    execute(device, &scene, &log.scene_file, &run_options, Some(Resumption { checkpoint, earlier: log.resumed }))
+    execute(device, &scene, &log.scene_file, &run_options, Some(Resumption { checkpoint, earlier: log.resumed, _lock: lock }))
+}
+
+/// Refuses to resume where a frame the run keeps is no longer as it wrote it (deleted, cut
+/// short, replaced): the checkpoint cannot write an earlier frame again.
+fn verify_frames(dir: &Path, files: &[summary::WrittenFile], log: &RunLog) -> Result<(), RunError> {
+    for file in files {
+        let path = dir.join(&file.name);
+        let problem = match std::fs::read(&path) {
+            Err(e) => format!("cannot be read: {e}"),
+            Ok(bytes) if bytes.len() as u64 != file.bytes => {
+                format!("holds {} bytes where the run wrote {}", bytes.len(), file.bytes)
+            }
+            Ok(bytes) if checkpoint::fnv1a(&bytes) != file.digest => "was changed since the run wrote it".to_string(),
+            Ok(_) => continue,
+        };
+        return Err(RunError::Scene(SceneError {
+            file: path.display().to_string(),
+            field: "(file)".into(),
+            reason: format!(
+                "{problem}; the checkpoint cannot write an earlier frame again, so start the run over with `{}`",
+                rerun(log, dir)
+            ),
+        }));
+    }
+    Ok(())
+}
+
+/// The command that runs the run `log` logs again from the start, into `dir`.
+fn rerun(log: &RunLog, dir: &Path) -> String {
+    let sets: String = log.overrides.iter().map(|o| format!(" --set {o}")).collect();
+    format!("coil run {}{sets} --out {} --overwrite", log.scene_file, dir.display())
 }
 
 /// Removes the frames numbered `first` and later: written after the checkpoint by a run that

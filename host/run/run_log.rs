@@ -23,6 +23,9 @@ pub struct Resumed {
     pub time_s: f64,
 }
 
+/// The largest run log read (bytes): its scene, overrides and summary take a few KiB.
+const MAX_LOG_BYTES: u64 = 16 << 20;
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Status {
@@ -73,7 +76,8 @@ impl RunLog {
     pub fn read(path: &Path) -> Result<RunLog, SceneError> {
         let file = path.display().to_string();
         let bad = |field: String, reason: String| SceneError { file: file.clone(), field, reason };
-        let text = std::fs::read_to_string(path).map_err(|e| bad("(file)".into(), format!("cannot be read: {e}")))?;
+        let text =
+            crate::scene::read_bounded(path, MAX_LOG_BYTES).map_err(|e| bad("(file)".into(), format!("cannot be read: {e}")))?;
         let json = &mut serde_json::Deserializer::from_str(&text);
         serde_path_to_error::deserialize(json).map_err(|e| {
             let field = e.path().to_string();

@@ -55,6 +55,9 @@ impl fmt::Display for Summary {
 pub struct Tally {
     /// Simulated time (s) of each frame written, in order.
     pub frame_times: Vec<f64>,
+    /// Every frame file written, in order, as it was written: what a resumed run checks the
+    /// frames it keeps against.
+    pub frame_files: Vec<WrittenFile>,
     /// When the next frame is due (s), with `output.every_s`.
     pub next_frame_time: f64,
     /// Particles moved, summed over steps.
@@ -64,6 +67,22 @@ pub struct Tally {
     pub max_speed: f64,
     /// Wall time the run has taken (s): before this process, then up to the last checkpoint.
     pub wall_s: f64,
+}
+
+/// A file as a run wrote it into its output folder.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WrittenFile {
+    /// Its name in the output folder.
+    pub name: String,
+    pub bytes: u64,
+    /// FNV-1a of its bytes.
+    pub digest: u64,
+}
+
+impl WrittenFile {
+    pub fn of(name: String, bytes: &[u8]) -> Self {
+        Self { name, bytes: bytes.len() as u64, digest: super::checkpoint::fnv1a(bytes) }
+    }
 }
 
 impl Tally {

@@ -102,14 +102,15 @@ fn drive<R: Real, M: Model<R>, B: Backend<R>>(
         let path = dir.join(folder::CHECKPOINT);
         checkpoint::write(dir, run, particles, scene, tally).map_err(|e| io_error("checkpoint", &path, e))
     };
+    let series = frames.series_path();
+    let summary = |run: &RunState<R, M>, tally: &Tally| clock.summary(run, tally, scene, series.clone());
     if fresh {
-        frames.write(&sim.run, sim.host(), &mut tally)?;
+        frames.capture(&sim.run, sim.host()).map_err(|i| RunError::Unstable(i, Box::new(summary(&sim.run, &tally))))?;
+        frames.write(sim.run.time, &mut tally)?;
         save_checkpoint(&sim.run, &sim.host().particles, &mut tally)?;
     }
 
     let mut progress = Progress::new(options.quiet, sim.run.time, sim.run.steps);
-    let series = frames.series_path();
-    let summary = |run: &RunState<R, M>, tally: &Tally| clock.summary(run, tally, scene, series.clone());
     let stopped = |stop: StepError<B::Fault>, s: Summary| match stop {
         StepError::Unstable(instability) => RunError::Unstable(instability, Box::new(s)),
         StepError::Backend(e) => RunError::Device(e.to_string(), Box::new(s)),
@@ -133,7 +134,10 @@ fn drive<R: Real, M: Model<R>, B: Backend<R>>(
             if let Err(stop) = sim.sync() {
                 break Err(stop);
             }
-            frames.write(&sim.run, sim.host(), &mut tally)?;
+            if let Err(instability) = frames.capture(&sim.run, sim.host()) {
+                break Err(StepError::Unstable(instability));
+            }
+            frames.write(sim.run.time, &mut tally)?;
             tally.schedule_past(sim.run.time, every_s);
             save_checkpoint(&sim.run, &sim.host().particles, &mut tally)?;
         }

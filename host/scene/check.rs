@@ -25,6 +25,9 @@ pub struct Report {
     pub inlet_rate: f64,
     /// Fluid particles at the end time, from the inlet rates and the budget.
     pub final_fluid: usize,
+    /// When the fluid capacity fills and stops the inlets (s), and the capacity the end time
+    /// would need; `None` where it does not fill.
+    pub capacity_full: Option<(f64, usize)>,
     pub spacing_m: f64,
     pub support_radius_m: f64,
     /// The fastest the fluid can move without viscosity (m/s), and over c; `None` where
@@ -58,6 +61,12 @@ impl fmt::Display for Report {
             writeln!(f, "inlets             {:.0} particles/s, {} fluid at the end time", self.inlet_rate, self.final_fluid)?;
         }
         writeln!(f, "capacity           {} fluid (simulation.max_fluid_particles)", self.fluid_capacity)?;
+        if let Some((t, needed)) = self.capacity_full {
+            writeln!(
+                f,
+                "warning            the capacity fills at t = {t:.3} s and stops the inlets; the end time needs about {needed} (raise simulation.max_fluid_particles)"
+            )?;
+        }
         writeln!(f, "spacing, h         {} m, {} m", self.spacing_m, self.support_radius_m)?;
         match (self.speed_bound_m_s, self.mach_bound) {
             (Some(speed), Some(mach)) => writeln!(
@@ -138,10 +147,32 @@ fn fluid_at(t: f64, initial: usize, capacity: usize, inlets: &[Inlet]) -> f64 {
     (initial as f64 + injected).min(capacity as f64)
 }
 
+/// When the inlets fill `capacity` (s), and the fluid the end time `end` (s) would need, where
+/// they fill it before the end.
+fn capacity_full(end: f64, initial: usize, capacity: usize, inlets: &[Inlet]) -> Option<(f64, usize)> {
+    let needed = fluid_at(end, initial, usize::MAX, inlets);
+    if needed <= capacity as f64 {
+        return None;
+    }
+    // The delivered fluid only grows with time: bisect for the moment it reaches the capacity.
+    let (mut before, mut after) = (0.0, end);
+    for _ in 0..60 {
+        let t = 0.5 * (before + after);
+        if fluid_at(t, initial, usize::MAX, inlets) < capacity as f64 {
+            before = t;
+        } else {
+            after = t;
+        }
+    }
+    Some((after, needed.ceil() as usize))
+}
+
 /// `scene`'s material in a closed box filled with a cube of about `fluid` particles at rest.
 fn fluid_box(scene: &Scene, fluid: f64) -> Scene {
     let s = scene.material.particle_spacing_m;
-    let edge = fluid.max(1000.0).cbrt().ceil() * s;
+    // The cost of a particle-step hardly changes past a few thousand particles; a larger box
+    // would only make the calibration outlast the time it was given.
+    let edge = fluid.clamp(1000.0, 100_000.0).cbrt().ceil() * s;
     let pad = 2.0 * scene.support_radius() + s;
     let mut proxy = scene.clone();
     proxy.inlets.clear();
@@ -166,7 +197,7 @@ impl WithModel for Calibrate<'_> {
         let started = Instant::now();
         let mut particle_steps = 0.0;
         // Stop at the first instability too: a scene's cost is still worth reporting.
-        while (sim.run.steps < 5 || started.elapsed() < self.wall) && sim.run.steps < 10_000 && sim.step().is_ok() {
+        while (sim.run.steps < 2 || started.elapsed() < self.wall) && sim.run.steps < 10_000 && sim.step().is_ok() {
             particle_steps += sim.particles().len() as f64;
         }
         let seconds = started.elapsed().as_secs_f64();
@@ -210,8 +241,9 @@ impl WithModel for Plan<'_> {
 
 /// Checks `scene` and measures its cost for `calibration` of wall time.
 pub fn check(scene: &Scene, file: &str, precision: Option<Precision>, calibration: Duration) -> Result<Report, SceneError> {
-    let initial = initial_particles(scene, file)?;
     let precision = precision.unwrap_or(scene.simulation.precision);
+    scene.check_precision(precision, file)?;
+    let initial = initial_particles(scene, file)?;
     // The run as `coil run` sets it up: its inlets, capacity, time stepper and memory.
     let plan = with_precision_and_model(precision, scene, Plan { scene, initial: &initial });
     let (inlets, capacity) = (&plan.inlets, plan.fluid_capacity);
@@ -248,6 +280,7 @@ pub fn check(scene: &Scene, file: &str, precision: Option<Precision>, calibratio
         fluid_capacity: capacity,
         inlet_rate: inlets.iter().map(Inlet::particles_per_second).sum(),
         final_fluid: fluid_at(end, initial.fluid.len(), capacity, inlets) as usize,
+        capacity_full: capacity_full(end, initial.fluid.len(), capacity, inlets),
         spacing_m: scene.material.particle_spacing_m,
         support_radius_m: scene.support_radius(),
         speed_bound_m_s: speed_bound,

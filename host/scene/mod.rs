@@ -469,16 +469,42 @@ pub enum NozzleMotion {
     Waypoints { waypoints: Vec<[f64; 4]> },
 }
 
+/// A number as an error message prints it: plainly when that is short, else in scientific
+/// notation to four digits (`1e308`, not 309 digits).
+pub fn short(v: f64) -> String {
+    let plain = v.to_string();
+    if plain.len() <= 9 {
+        return plain;
+    }
+    let rounded: f64 = format!("{v:.3e}").parse().unwrap_or(v);
+    format!("{rounded:e}")
+}
+
 /// The TOML text of a scene file; a `run.json` gives its `scene`, written back as TOML.
 fn scene_text(path: &Path) -> Result<String, SceneError> {
     if path.extension().is_some_and(|x| x == "json") {
         return logged_scene_text(&crate::run::run_log::RunLog::read(path)?, path);
     }
-    std::fs::read_to_string(path).map_err(|e| SceneError {
+    read_bounded(path, MAX_SCENE_BYTES).map_err(|e| SceneError {
         file: path.display().to_string(),
         field: "(file)".into(),
         reason: format!("cannot be read: {e}"),
     })
+}
+
+/// The largest scene file read (bytes): the shipped scenes are about 2 KiB.
+pub const MAX_SCENE_BYTES: u64 = 1 << 20;
+
+/// A text file of at most `limit` bytes; a longer one (or an endless one, as `/dev/zero`) is
+/// an error without reading past the limit.
+pub fn read_bounded(path: &Path, limit: u64) -> std::io::Result<String> {
+    use std::io::Read;
+    let mut text = String::new();
+    std::fs::File::open(path)?.take(limit + 1).read_to_string(&mut text)?;
+    if text.len() as u64 > limit {
+        return Err(std::io::Error::other(format!("longer than {limit} bytes, the most read")));
+    }
+    Ok(text)
 }
 
 /// The scene a run log holds, as TOML; `path` names the log in errors.
@@ -557,13 +583,28 @@ impl Scene {
 
     /// Parses and validates scene text; `file` names it in errors.
     pub fn parse(text: &str, file: &str) -> Result<Scene, SceneError> {
-        let scene: Scene = toml::from_str(text).map_err(|e| SceneError {
-            file: file.into(),
-            field: e.span().and_then(|s| crate::scene::toml_field::field_at(text, s.start)).unwrap_or_else(|| "(syntax)".into()),
-            reason: e.message().to_string()
-                + &suggestion(e.message())
-                + &e.span().map(|s| format!(" (at line {})", 1 + text[..s.start].matches('\n').count())).unwrap_or_default(),
+        let scene: Scene = toml::from_str(text).map_err(|e| {
+            let mut field =
+                e.span().and_then(|s| crate::scene::toml_field::field_at(text, s.start)).unwrap_or_else(|| "(syntax)".into());
+            // serde points a missing field at the table that lacks it: name the field itself.
+            let missing = e.message().strip_prefix("missing field `").and_then(|rest| rest.strip_suffix('`'));
+            if let Some(name) = missing {
+                field = if field == "(syntax)" || field.is_empty() { name.to_string() } else { format!("{field}.{name}") };
+            }
+            SceneError {
+                file: file.into(),
+                field,
+                reason: e.message().to_string()
+                    + &suggestion(e.message())
+                    + &e.span().map(|s| format!(" (at line {})", 1 + text[..s.start].matches('\n').count())).unwrap_or_default(),
+            }
         })?;
+        let given: toml::Table = toml::from_str(text).map_err(|e| SceneError {
+            file: file.into(),
+            field: "(syntax)".into(),
+            reason: e.message().to_string(),
+        })?;
+        scene.check_array_lengths(&given, file)?;
         scene.validate(file)?;
         Ok(scene)
     }

@@ -51,6 +51,12 @@ impl Override {
         }
         let value = match toml::from_str::<Table>(&format!("v = {value}")) {
             Ok(mut t) => t.remove("v").expect("the key just parsed"),
+            // A number TOML cannot hold (1e400, 2^64) would otherwise be taken as a string.
+            Err(_) if value.parse::<f64>().is_ok() => {
+                return Err(bad(format!(
+                    "`{value}` is out of range: a number must be finite in double precision (below about 1.8e308) and a whole number at most 2^63 - 1"
+                )))
+            }
             Err(_) => Value::String(value.to_string()),
         };
         Ok(Self { given: given.to_string(), path, value })

@@ -69,23 +69,63 @@ fn room(p: &InitialParticles, points: f64, limit: &ParticleLimit, field: String,
 }
 
 /// Gives the fluid particles added since `before` their initial velocity and refuses them if
-/// any sits in a wall; `field` names the fluid shape in the error.
+/// any sits in a wall or on fluid an earlier shape made; `field` names the fluid shape in the
+/// error, `walls` the scene's walls.
 fn settle(
     p: &mut InitialParticles,
     before: usize,
     velocity: [f64; 3],
-    s: f64,
+    walls: &Walls,
     field: String,
     file: &str,
 ) -> Result<(), SceneError> {
+    let err = |reason: String| Err(SceneError { file: file.into(), field: field.clone(), reason });
     p.fluid_velocity.resize(p.fluid.len(), velocity);
-    match overlap(&p.boundary, &p.fluid[before..], s) {
-        None => Ok(()),
-        Some(q) => Err(SceneError {
-            file: file.into(),
-            field,
-            reason: format!("overlaps a wall at {q:?}: fluid must start inside the walls, not in them"),
-        }),
+    let s = walls.spacing;
+    if let Some(q) = overlap(&p.boundary, &p.fluid[before..], s) {
+        return err(format!("overlaps a wall at {q:?}: fluid must start inside the walls, not in them"));
+    }
+    if let Some((q, k)) = p.fluid[before..].iter().find_map(|&q| walls.holding(q).map(|k| (q, k))) {
+        return err(format!("reaches into the walls of boundary[{k}] at {q:?}: fluid must start inside the walls, not in them"));
+    }
+    if let Some(q) = overlap(&p.fluid[..before], &p.fluid[before..], s) {
+        return err(format!("overlaps the fluid of an earlier shape at {q:?}: particles would start on top of each other"));
+    }
+    Ok(())
+}
+
+/// The solid regions of a scene's walls: where their particles lie.
+struct Walls<'a> {
+    boundaries: &'a [Boundary],
+    domain: &'a crate::scene::Domain,
+    spacing: f64,
+    /// The depth of the wall layers (m).
+    depth: f64,
+}
+
+impl Walls<'_> {
+    /// The boundary whose wall layers hold point `q` (m), if any.
+    fn holding(&self, q: [f64; 3]) -> Option<usize> {
+        let (d, s) = (self.depth, self.spacing);
+        // Points on a wall's surface are the fluid's: the first fluid layer lies s/2 inside it.
+        let inside = |lo: f64, x: f64, hi: f64| x > lo + 1e-9 * s && x < hi - 1e-9 * s;
+        self.boundaries.iter().position(|b| match *b {
+            Boundary::Box { min_m, max_m, open_top } => {
+                let top = if open_top { max_m[1] } else { max_m[1] + d };
+                let in_outer = (0..3).all(|a| {
+                    let (lo, hi) =
+                        if self.domain.periodic[a] { (f64::NEG_INFINITY, f64::INFINITY) } else { (min_m[a] - d, max_m[a] + d) };
+                    inside(lo, q[a], if a == 1 { top.min(hi) } else { hi })
+                });
+                let in_interior = (0..3).all(|a| q[a] >= min_m[a] && q[a] <= max_m[a]);
+                in_outer && !in_interior
+            }
+            Boundary::Plate { height_m, min_xz_m, max_xz_m } => {
+                let lo = min_xz_m.unwrap_or([self.domain.min_m[0], self.domain.min_m[2]]);
+                let hi = max_xz_m.unwrap_or([self.domain.max_m[0], self.domain.max_m[2]]);
+                inside(height_m - d, q[1], height_m) && inside(lo[0], q[0], hi[0]) && inside(lo[1], q[2], hi[1])
+            }
+        })
     }
 }
 
@@ -126,6 +166,7 @@ pub fn initial_particles_within(scene: &Scene, file: &str, limit: &ParticleLimit
     let err = |field: String, reason: String| SceneError { file: file.into(), field, reason };
 
     let periodic = scene.domain.periodic;
+    let walls = Walls { boundaries: &scene.boundaries, domain: &scene.domain, spacing: s, depth: layers as f64 * s };
     for (k, b) in scene.boundaries.iter().enumerate() {
         let before = p.boundary.len();
         match *b {
@@ -164,6 +205,12 @@ pub fn initial_particles_within(scene: &Scene, file: &str, limit: &ParticleLimit
                 format!("its {layers} wall layers reach {q:?}, outside the domain box; enlarge the domain"),
             ));
         }
+        if let Some(q) = overlap(&p.boundary[..before], &p.boundary[before..], s) {
+            return Err(err(
+                format!("boundary[{k}]"),
+                format!("its walls overlap an earlier boundary's at {q:?}: wall particles would lie on top of each other"),
+            ));
+        }
     }
 
     for (k, b) in scene.fluid_blocks.iter().enumerate() {
@@ -171,7 +218,7 @@ pub fn initial_particles_within(scene: &Scene, file: &str, limit: &ParticleLimit
         let n = [0, 1, 2].map(|a| cells(b.max_m[a] - b.min_m[a], s));
         room(&p, points(n), limit, format!("fluid_block[{k}]"), file)?;
         lattice(b.min_m, s, [0; 3], n, |_, _| true, &mut p.fluid);
-        settle(&mut p, before, b.velocity_m_s, s, format!("fluid_block[{k}]"), file)?;
+        settle(&mut p, before, b.velocity_m_s, &walls, format!("fluid_block[{k}]"), file)?;
     }
     for (k, t) in scene.fluid_tori.iter().enumerate() {
         let before = p.fluid.len();
@@ -191,7 +238,7 @@ pub fn initial_particles_within(scene: &Scene, file: &str, limit: &ParticleLimit
             },
             &mut p.fluid,
         );
-        settle(&mut p, before, t.velocity_m_s, s, format!("fluid_torus[{k}]"), file)?;
+        settle(&mut p, before, t.velocity_m_s, &walls, format!("fluid_torus[{k}]"), file)?;
     }
     for (k, c) in scene.fluid_cylinders.iter().enumerate() {
         let before = p.fluid.len();
@@ -200,11 +247,33 @@ pub fn initial_particles_within(scene: &Scene, file: &str, limit: &ParticleLimit
         let n = [cells(2.0 * r, s), cells(c.height_m, s), cells(2.0 * r, s)];
         room(&p, points(n), limit, format!("fluid_cylinder[{k}]"), file)?;
         lattice(min, s, [0; 3], n, |_, x| (x[0] - b[0]).powi(2) + (x[2] - b[2]).powi(2) <= r * r, &mut p.fluid);
-        settle(&mut p, before, c.velocity_m_s, s, format!("fluid_cylinder[{k}]"), file)?;
+        settle(&mut p, before, c.velocity_m_s, &walls, format!("fluid_cylinder[{k}]"), file)?;
     }
     let mass = calibrated_mass(scene.material.rest_density_kg_m3, s, scene.support_radius(), scene.material.density_kernel);
+    let mut smallest_layer = usize::MAX;
     for (k, config) in scene.inlets.iter().enumerate() {
         let inlet = Inlet::new(config, s, scene.support_radius(), mass, scene.material.rest_density_kg_m3);
+        smallest_layer = smallest_layer.min(inlet.layer_size());
+        let end = scene.simulation.end_time_s;
+        let (start, stop) = inlet.active();
+        for t in inlet.turning_times(start, stop.min(end)) {
+            for q in inlet.reach(t) {
+                if !scene.domain.contains(q) {
+                    return Err(err(
+                        format!("inlet[{k}]"),
+                        format!(
+                            "its nozzle and tube reach {q:?} at t = {t} s, outside the domain box, where nothing can be injected; move or narrow the nozzle, or enlarge the domain"
+                        ),
+                    ));
+                }
+                if let Some(b) = walls.holding(q) {
+                    return Err(err(
+                        format!("inlet[{k}]"),
+                        format!("its nozzle and tube reach into the walls of boundary[{b}] at {q:?} at t = {t} s; move the nozzle out of them"),
+                    ));
+                }
+            }
+        }
         let apart = inlet.layer_distance() / s;
         if !(MIN_LAYER_DISTANCE..=MAX_LAYER_DISTANCE).contains(&apart) {
             return Err(err(
@@ -215,6 +284,22 @@ pub fn initial_particles_within(scene: &Scene, file: &str, limit: &ParticleLimit
                 ),
             ));
         }
+    }
+    if p.fluid.is_empty() && scene.inlets.is_empty() {
+        return Err(err(
+            "(scene)".into(),
+            "has no fluid: no fluid_block, fluid_torus or fluid_cylinder holds a lattice point and there is no inlet".into(),
+        ));
+    }
+    let capacity = scene.simulation.max_fluid_particles.unwrap_or(p.fluid.len());
+    if !scene.inlets.is_empty() && capacity < p.fluid.len() + smallest_layer {
+        return Err(err(
+            "simulation.max_fluid_particles".into(),
+            format!(
+                "the fluid capacity {capacity} leaves no room for an inlet's layer of {smallest_layer} particles beyond the {} of the initial fluid: the inlets would inject nothing; raise it (`coil check` says what the end time needs)",
+                p.fluid.len()
+            ),
+        ));
     }
     if let Some(budget) = scene.simulation.max_fluid_particles {
         if budget < p.fluid.len() {

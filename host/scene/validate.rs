@@ -1,17 +1,85 @@
 //! What a scene's values must mean, checked once at load: one validator per section, each
 //! refusing a value with the field named as `--set` spells it.
 
-use super::{Boundary, Domain, Material, Nozzle, NozzleMotion, Output, Scene, SceneError, ViscosityOperator};
-use super::{SimulationSettings, MAX_HOURGLASS_CONTROL};
-use crate::simulation::time_step::StabilityBound;
+use super::{short, Boundary, Domain, Material, Nozzle, NozzleMotion, Output, Scene, SceneError, ViscosityOperator};
+use super::{Precision, SimulationSettings, MAX_HOURGLASS_CONTROL};
+use crate::simulation::time_step::{Limit, StabilityBound};
+use toml::Value;
+
+/// Rest densities a scene may give (kg/m^3): from a thin gas to past any liquid, so that the
+/// pressure c^2 rho0 and the pair terms m / rho^2 stay normal numbers in f32.
+pub const REST_DENSITY_KG_M3: (f64, f64) = (1e-3, 1e6);
+/// Sound speeds (m/s): the squares in Eq. (6) stay finite in f32 with any rest density above.
+pub const SOUND_SPEED_M_S: (f64, f64) = (1e-3, 1e5);
+/// Support radii h (m) in f32 and in f64: the kernels' coefficients 315 / (64 pi h^9) and
+/// 45 / (pi h^6) stay finite and normal.
+pub const SUPPORT_RADIUS_M_F32: (f64, f64) = (1e-4, 1e3);
+pub const SUPPORT_RADIUS_M_F64: (f64, f64) = (1e-9, 1e9);
+/// Kinematic viscosities (m^2/s): from below water's to past pitch's.
+pub const VISCOSITY_M2_S: (f64, f64) = (1e-9, 1e9);
+/// The largest Cross K (s) and rate index n: K times a shear rate stays finite in f32.
+pub const MAX_CROSS_K_S: f64 = 1e6;
+pub const MAX_CROSS_N: f64 = 100.0;
+/// The fastest a scene may start or drive fluid (m/s), and the strongest gravity (m/s^2):
+/// beyond anything a liquid does; Mach numbers are `coil check`'s to judge.
+pub const MAX_SPEED_M_S: f64 = 1e4;
+pub const MAX_GRAVITY_M_S2: f64 = 1e4;
+/// The most steps a run may need to reach its end time at its largest dt: about a day at a
+/// GPU's 0.1 ms a step.
+pub const MAX_STEPS: f64 = 1e9;
+/// The most frames a run may write.
+pub const MAX_FRAMES: f64 = 1e5;
+/// The longest scene name (characters); it names the output folder and the series.
+const MAX_NAME_CHARS: usize = 100;
 
 impl Scene {
+    /// Refuses an array of `given` (the scene as its text reads) longer or shorter than the
+    /// field it fills: serde fills a fixed-size array from the first elements and drops the rest.
+    pub(super) fn check_array_lengths(&self, given: &toml::Table, file: &str) -> Result<(), SceneError> {
+        let check = Check { file };
+        let written = Value::try_from(self).map_err(|e| SceneError {
+            file: file.into(),
+            field: "(scene)".into(),
+            reason: format!("cannot be written out: {e}"),
+        })?;
+        match first_length_mismatch(&Value::Table(given.clone()), &written, String::new()) {
+            Some((field, got, expected)) => check.fail(&field, format!("must have {expected} elements, got {got}")).map(|_| ()),
+            None => Ok(()),
+        }
+    }
+
+    /// Refuses a support radius whose kernel coefficients `precision` cannot hold: checked at
+    /// load for the scene's precision, and again where a run or check overrides it.
+    pub fn check_precision(&self, precision: Precision, file: &str) -> Result<(), SceneError> {
+        let (lo, hi, name) = match precision {
+            Precision::F32 => (SUPPORT_RADIUS_M_F32.0, SUPPORT_RADIUS_M_F32.1, "f32"),
+            Precision::F64 => (SUPPORT_RADIUS_M_F64.0, SUPPORT_RADIUS_M_F64.1, "f64"),
+        };
+        let h = self.support_radius();
+        if h >= lo && h <= hi {
+            return Ok(());
+        }
+        Check { file }.fail(
+            "material.particle_spacing_m",
+            format!(
+                "gives the support radius h = {} m, outside {} to {} m, where the kernels' coefficients stay finite in {name}",
+                short(h),
+                short(lo),
+                short(hi)
+            ),
+        )
+    }
+
     pub(super) fn validate(&self, file: &str) -> Result<(), SceneError> {
         let check = Check { file };
+        check.name(&self.name)?;
+        check.finite(self)?;
         check.material(&self.material)?;
+        self.check_precision(self.simulation.precision, file)?;
         check.domain(&self.domain, &self.material, self.support_radius())?;
         check.simulation(&self.simulation, &self.material, self.support_radius())?;
-        check.output(&self.output)?;
+        let (dt, _) = largest_dt(&self.simulation, &self.material, self.support_radius());
+        check.output(&self.output, self.simulation.end_time_s, self.simulation.end_time_s / dt)?;
         check.fluid(self)?;
         check.boundaries(&self.boundaries, &self.domain)?;
         check.inlets(self)
@@ -34,13 +102,60 @@ impl Check<'_> {
         if v > 0.0 && v.is_finite() {
             Ok(())
         } else {
-            self.fail(field, format!("must be a positive number, got {v}"))
+            self.fail(field, format!("must be a positive number, got {}", short(v)))
+        }
+    }
+
+    /// `v` within `range`, whose reason `why` gives.
+    fn within(&self, field: &str, v: f64, (lo, hi): (f64, f64), why: &str) -> Checked {
+        if v >= lo && v <= hi {
+            Ok(())
+        } else {
+            self.fail(field, format!("must be from {} to {} ({why}), got {}", short(lo), short(hi), short(v)))
+        }
+    }
+
+    /// A vector's length at most `most`.
+    fn magnitude(&self, field: &str, v: [f64; 3], most: f64, what: &str) -> Checked {
+        let length = v.iter().map(|c| c * c).sum::<f64>().sqrt();
+        if length <= most {
+            Ok(())
+        } else {
+            self.fail(field, format!("{what} of {} is beyond any liquid's; at most {}", short(length), short(most)))
+        }
+    }
+
+    /// The name becomes the output folder and the series' file name, so it must be a plain file
+    /// name: nothing a path could climb out of the output folder with.
+    fn name(&self, name: &str) -> Checked {
+        let plain = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.';
+        if name.is_empty() || name.starts_with('.') || !name.chars().all(plain) || name.chars().count() > MAX_NAME_CHARS {
+            return self.fail(
+                "name",
+                format!(
+                    "must be a plain file name of 1 to {MAX_NAME_CHARS} letters, digits, '_', '-' or '.', not starting with '.', got {name:?}"
+                ),
+            );
+        }
+        Ok(())
+    }
+
+    /// Every number of the scene is finite.
+    fn finite(&self, scene: &Scene) -> Checked {
+        let value = Value::try_from(scene).map_err(|e| SceneError {
+            file: self.file.into(),
+            field: "(scene)".into(),
+            reason: format!("cannot be written out: {e}"),
+        })?;
+        match first_non_finite(&value, String::new()) {
+            Some((field, v)) => self.fail(&field, format!("must be a finite number, got {v}")),
+            None => Ok(()),
         }
     }
 
     fn material(&self, m: &Material) -> Checked {
-        self.positive("material.rest_density_kg_m3", m.rest_density_kg_m3)?;
-        self.positive("material.sound_speed_m_s", m.sound_speed_m_s)?;
+        self.within("material.rest_density_kg_m3", m.rest_density_kg_m3, REST_DENSITY_KG_M3, "kg/m^3")?;
+        self.within("material.sound_speed_m_s", m.sound_speed_m_s, SOUND_SPEED_M_S, "m/s")?;
         self.positive("material.particle_spacing_m", m.particle_spacing_m)?;
         if !(m.support_radius_factor > 1.0 && m.support_radius_factor <= 4.0) {
             return self.fail(
@@ -51,22 +166,21 @@ impl Check<'_> {
                 ),
             );
         }
-        if m.gravity_m_s2.iter().any(|g| !g.is_finite()) {
-            return self.fail("material.gravity_m_s2", "must be finite".into());
-        }
+        self.magnitude("material.gravity_m_s2", m.gravity_m_s2, MAX_GRAVITY_M_S2, "a gravity")?;
         let v = &m.viscosity;
-        self.positive("material.viscosity.nu0_m2_s", v.nu0_m2_s)?;
-        self.positive("material.viscosity.nu_inf_m2_s", v.nu_inf())?;
+        self.within("material.viscosity.nu0_m2_s", v.nu0_m2_s, VISCOSITY_M2_S, "m^2/s")?;
+        self.within("material.viscosity.nu_inf_m2_s", v.nu_inf(), VISCOSITY_M2_S, "m^2/s")?;
         if v.nu_inf() > v.nu0_m2_s {
             return self.fail(
                 "material.viscosity.nu_inf_m2_s",
                 format!("must not exceed nu0_m2_s ({}): the Cross model is shear-thinning, got {}", v.nu0_m2_s, v.nu_inf()),
             );
         }
-        if !(v.cross_k_s >= 0.0 && v.cross_k_s.is_finite()) {
-            return self.fail("material.viscosity.cross_k_s", format!("must be zero or positive, got {}", v.cross_k_s));
-        }
+        self.within("material.viscosity.cross_k_s", v.cross_k_s, (0.0, MAX_CROSS_K_S), "s; 0 is Newtonian")?;
         self.positive("material.viscosity.cross_n", v.cross_n)?;
+        if v.cross_n > MAX_CROSS_N {
+            return self.fail("material.viscosity.cross_n", format!("must be at most {MAX_CROSS_N}, got {}", short(v.cross_n)));
+        }
         if v.operator == ViscosityOperator::Laplacian && !v.is_newtonian() {
             return self.fail(
                 "material.viscosity.operator",
@@ -96,7 +210,7 @@ impl Check<'_> {
                 return self.fail("domain.max_m", format!("must exceed domain.min_m on every axis (axis {a})"));
             }
         }
-        let cells: f64 = (0..3).map(|a| ((d.max_m[a] - d.min_m[a]) / h).ceil()).product();
+        let cells: f64 = (0..3).map(|a| ((d.max_m[a] - d.min_m[a]) / h).ceil().max(1.0)).product();
         if cells > 2.0e8 {
             return self.fail(
                 "domain",
@@ -157,15 +271,62 @@ impl Check<'_> {
                 );
             }
         }
+        let (dt, limit) = largest_dt(s, m, h);
+        let steps = s.end_time_s / dt;
+        if !(steps <= MAX_STEPS) {
+            let field = match limit {
+                Limit::Fixed => "simulation.time_step.fixed_s",
+                _ if ts.safety_factor < 1.0 && steps * ts.safety_factor <= MAX_STEPS => "simulation.time_step.safety_factor",
+                _ => "simulation.end_time_s",
+            };
+            return self.fail(
+                field,
+                format!(
+                    "the run would need {} steps of at most {} s ({}) to reach simulation.end_time_s = {} s; at most {} can be run",
+                    short(steps.ceil()),
+                    short(dt),
+                    limit,
+                    short(s.end_time_s),
+                    short(MAX_STEPS)
+                ),
+            );
+        }
         Ok(())
     }
 
-    fn output(&self, o: &Output) -> Checked {
+    /// `steps`: the fewest steps the run can take (at its largest dt).
+    fn output(&self, o: &Output, end_time_s: f64, steps: f64) -> Checked {
+        if o.every_s.is_some() && o.every_steps.is_some() {
+            return self.fail("output.every_steps", "and output.every_s both given: keep one of them".into());
+        }
         if let Some(e) = o.every_s {
             self.positive("output.every_s", e)?;
+            if end_time_s / e > MAX_FRAMES {
+                return self.fail(
+                    "output.every_s",
+                    format!(
+                        "{} s would write {} frames by simulation.end_time_s = {} s; at most {} may be written",
+                        short(e),
+                        short((end_time_s / e).floor() + 1.0),
+                        short(end_time_s),
+                        short(MAX_FRAMES)
+                    ),
+                );
+            }
         }
         if o.every_steps == Some(0) {
             return self.fail("output.every_steps", "must be at least 1".into());
+        }
+        if let Some(k) = o.every_steps.filter(|&k| steps / k as f64 > MAX_FRAMES) {
+            return self.fail(
+                "output.every_steps",
+                format!(
+                    "{k} would write at least {} frames over the run's {} steps or more; at most {} may be written",
+                    short((steps / k as f64).floor()),
+                    short(steps.ceil()),
+                    short(MAX_FRAMES)
+                ),
+            );
         }
         if o.formats.is_empty() {
             return self.fail("output.formats", "must name at least one of \"vtu\", \"ply\", \"xyz\"".into());
@@ -185,6 +346,7 @@ impl Check<'_> {
             if !inside(b.min_m) || !inside(b.max_m) {
                 return self.fail(&format!("fluid_block[{k}]"), "lies outside the domain box".into());
             }
+            self.magnitude(&format!("fluid_block[{k}].velocity_m_s"), b.velocity_m_s, MAX_SPEED_M_S, "a speed")?;
         }
         for (k, t) in scene.fluid_tori.iter().enumerate() {
             let field = |f: &str| format!("fluid_torus[{k}].{f}");
@@ -202,6 +364,7 @@ impl Check<'_> {
             if !inside(lo) || !inside(hi) {
                 return self.fail(&format!("fluid_torus[{k}]"), "lies outside the domain box".into());
             }
+            self.magnitude(&field("velocity_m_s"), t.velocity_m_s, MAX_SPEED_M_S, "a speed")?;
         }
         for (k, c) in scene.fluid_cylinders.iter().enumerate() {
             let field = |f: &str| format!("fluid_cylinder[{k}].{f}");
@@ -211,6 +374,7 @@ impl Check<'_> {
             if !inside([b[0] - r, b[1], b[2] - r]) || !inside([b[0] + r, b[1] + c.height_m, b[2] + r]) {
                 return self.fail(&format!("fluid_cylinder[{k}]"), "lies outside the domain box".into());
             }
+            self.magnitude(&field("velocity_m_s"), c.velocity_m_s, MAX_SPEED_M_S, "a speed")?;
         }
         Ok(())
     }
@@ -256,11 +420,39 @@ impl Check<'_> {
         for (k, inlet) in scene.inlets.iter().enumerate() {
             let field = |f: &str| format!("inlet[{k}].{f}");
             self.positive(&field("speed_m_s"), inlet.speed_m_s)?;
-            match inlet.nozzle {
-                Nozzle::Circle { radius_m } => self.positive(&field("nozzle.radius_m"), radius_m)?,
+            if inlet.speed_m_s > MAX_SPEED_M_S {
+                return self.fail(
+                    &field("speed_m_s"),
+                    format!("must be at most {} m/s, got {}", short(MAX_SPEED_M_S), short(inlet.speed_m_s)),
+                );
+            }
+            let end = scene.simulation.end_time_s;
+            if !(inlet.start_s >= 0.0 && inlet.start_s < end) {
+                return self.fail(
+                    &field("start_s"),
+                    format!("must be from 0 to before simulation.end_time_s = {} s, got {}", short(end), short(inlet.start_s)),
+                );
+            }
+            if let Some(stop) = inlet.stop_s.filter(|&stop| stop <= inlet.start_s) {
+                return self
+                    .fail(&field("stop_s"), format!("must be after start_s = {} s, got {}", short(inlet.start_s), short(stop)));
+            }
+            // Setup lays the nozzle's section on the lattice: it must fit the domain first.
+            let d = &scene.domain;
+            let extent = (0..3).map(|a| d.max_m[a] - d.min_m[a]).fold(0.0, f64::max);
+            let sizes = match inlet.nozzle {
+                Nozzle::Circle { radius_m } => vec![("nozzle.radius_m", radius_m, 2.0 * radius_m)],
                 Nozzle::Rectangle { width_m, depth_m } => {
-                    self.positive(&field("nozzle.width_m"), width_m)?;
-                    self.positive(&field("nozzle.depth_m"), depth_m)?;
+                    vec![("nozzle.width_m", width_m, width_m), ("nozzle.depth_m", depth_m, depth_m)]
+                }
+            };
+            for (name, value, size) in sizes {
+                self.positive(&field(name), value)?;
+                if size > extent {
+                    return self.fail(
+                        &field(name),
+                        format!("makes the nozzle {} m across, wider than the domain box ({} m)", short(size), short(extent)),
+                    );
                 }
             }
             if !(inlet.wobble_m >= 0.0 && inlet.wobble_m < scene.material.particle_spacing_m) {
@@ -286,6 +478,9 @@ impl Check<'_> {
                     ),
                 );
             }
+            if let Some(NozzleMotion::Velocity { velocity_m_s }) = &inlet.motion {
+                self.magnitude(&field("motion.velocity_m_s"), *velocity_m_s, MAX_SPEED_M_S, "a speed")?;
+            }
             if let Some(NozzleMotion::Waypoints { waypoints }) = &inlet.motion {
                 if waypoints.is_empty() {
                     return self.fail(&field("motion.waypoints"), "needs at least one [t_s, x_m, y_m, z_m] point".into());
@@ -299,5 +494,49 @@ impl Check<'_> {
             }
         }
         Ok(())
+    }
+}
+
+/// The largest dt a run of these settings takes (s), and what sets it: the fixed dt, or the
+/// Eq. (10) bound times the safety factor (the velocity CFL only lowers it).
+fn largest_dt(s: &SimulationSettings, m: &Material, h: f64) -> (f64, Limit) {
+    match s.time_step.fixed_s {
+        Some(dt) => (dt, Limit::Fixed),
+        None => {
+            let v = &m.viscosity;
+            let (dt, limit) = StabilityBound::new(h, m.sound_speed_m_s, v.nu0_m2_s.max(v.nu_inf())).dt();
+            (dt * s.time_step.safety_factor, limit)
+        }
+    }
+}
+
+/// The first number in `value` that is not finite, with its field as `--set` spells it.
+fn first_non_finite(value: &Value, path: String) -> Option<(String, f64)> {
+    let join = |key: &str| if path.is_empty() { key.to_string() } else { format!("{path}.{key}") };
+    match value {
+        Value::Float(v) if !v.is_finite() => Some((path, *v)),
+        Value::Table(table) => table.iter().find_map(|(key, v)| first_non_finite(v, join(key))),
+        Value::Array(items) if items.iter().all(Value::is_table) => {
+            items.iter().enumerate().find_map(|(k, v)| first_non_finite(v, format!("{path}[{k}]")))
+        }
+        Value::Array(items) => items.iter().find_map(|v| first_non_finite(v, path.clone())),
+        _ => None,
+    }
+}
+
+/// The first array of `given` whose counterpart in `written` (the parsed scene, serialized) has
+/// another length: its field, and the two lengths.
+fn first_length_mismatch(given: &Value, written: &Value, path: String) -> Option<(String, usize, usize)> {
+    let join = |key: &str| if path.is_empty() { key.to_string() } else { format!("{path}.{key}") };
+    match (given, written) {
+        (Value::Table(g), Value::Table(w)) => {
+            g.iter().find_map(|(key, gv)| w.get(key).and_then(|wv| first_length_mismatch(gv, wv, join(key))))
+        }
+        (Value::Array(g), Value::Array(w)) if g.len() != w.len() => Some((path, g.len(), w.len())),
+        (Value::Array(g), Value::Array(w)) => g.iter().zip(w).enumerate().find_map(|(k, (gv, wv))| {
+            let item = if gv.is_table() { format!("{path}[{k}]") } else { path.clone() };
+            first_length_mismatch(gv, wv, item)
+        }),
+        _ => None,
     }
 }

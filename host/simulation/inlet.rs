@@ -173,6 +173,32 @@ impl Inlet {
         }
     }
 
+    /// Where a layer's particles can be at time `t` (s): at the nozzle's exit and at its
+    /// tube's upstream end, where layers are born, each shifted by up to the wobble.
+    pub fn reach(&self, t: f64) -> impl Iterator<Item = [f64; 3]> + '_ {
+        let (centre, _) = self.nozzle(t);
+        let shifts =
+            [(0.0, 0.0), (1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)].map(|(a, b)| (a * self.wobble, b * self.wobble));
+        [0.0, -self.tube_length].into_iter().flat_map(move |along| {
+            shifts.into_iter().flat_map(move |(a, b)| {
+                self.layer.iter().map(move |o| {
+                    [0, 1, 2]
+                        .map(|k| centre[k] + o[k] + along * self.direction[k] + a * self.across[0][k] + b * self.across[1][k])
+                })
+            })
+        })
+    }
+
+    /// The times from `start` to `stop` (s) at which the nozzle is at the ends of its straight
+    /// segments: between them it moves in a line, so checking its reach there covers its path.
+    pub fn turning_times(&self, start: f64, stop: f64) -> Vec<f64> {
+        let mut times = vec![start, stop];
+        if let Some(NozzleMotion::Waypoints { waypoints }) = &self.motion {
+            times.extend(waypoints.iter().map(|w| w[0]).filter(|&t| t > start && t < stop));
+        }
+        times
+    }
+
     /// Velocity of the fluid leaving a nozzle that moves at `nozzle_velocity` (m/s).
     fn jet_velocity(&self, nozzle_velocity: [f64; 3]) -> [f64; 3] {
         [0, 1, 2].map(|k| self.speed * self.direction[k] + nozzle_velocity[k])

@@ -35,7 +35,8 @@ use std::fmt;
 pub struct Instability {
     pub step: u64,
     pub time_s: f64,
-    /// Fluid particles with a non-finite velocity or a speed above the runaway limit.
+    /// Fluid particles with a non-finite velocity or density, or a speed above the runaway
+    /// limit.
     pub bad_particles: usize,
     pub max_speed_m_s: f64,
     pub runaway_speed_m_s: f64,
@@ -43,15 +44,25 @@ pub struct Instability {
     pub stability_bound_s: f64,
     /// The velocity the viscous terms read.
     pub viscous_velocity: ViscousVelocity,
+    /// The first non-finite value a frame would have held (field, particle id, value), where
+    /// that is what stopped the run.
+    pub non_finite: Option<String>,
 }
 
 impl fmt::Display for Instability {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "the run went unstable at step {} (t = {:.6e} s): {} particle(s) with a non-finite velocity or a speed above {:.3} m/s (largest finite speed {:.3e} m/s). ",
-            self.step, self.time_s, self.bad_particles, self.runaway_speed_m_s, self.max_speed_m_s
-        )?;
+        match &self.non_finite {
+            Some(what) => write!(
+                f,
+                "the run went unstable at step {} (t = {:.6e} s): {} particle(s) with a non-finite value, the first {what}; nothing non-finite was written. ",
+                self.step, self.time_s, self.bad_particles
+            )?,
+            None => write!(
+                f,
+                "the run went unstable at step {} (t = {:.6e} s): {} particle(s) with a non-finite velocity or density, or a speed above {:.3} m/s (largest finite speed {:.3e} m/s). ",
+                self.step, self.time_s, self.bad_particles, self.runaway_speed_m_s, self.max_speed_m_s
+            )?,
+        }
         if self.dt_s > self.stability_bound_s {
             write!(
                 f,

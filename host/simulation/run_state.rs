@@ -164,15 +164,22 @@ impl<R: Real, M: Model<R>> RunState<R, M> {
         if self.diagnostics.bad_particles == 0 {
             return Ok(());
         }
-        Err(Instability {
+        Err(self.instability(self.diagnostics.bad_particles as usize, None))
+    }
+
+    /// The run's state as the diagnosis of an instability of `bad_particles`, found by the
+    /// guard or (`non_finite`: what was not finite) in a frame about to be written.
+    pub(crate) fn instability(&self, bad_particles: usize, non_finite: Option<String>) -> Instability {
+        Instability {
             step: self.steps,
             time_s: self.time,
-            bad_particles: self.diagnostics.bad_particles as usize,
+            bad_particles,
             max_speed_m_s: self.diagnostics.max_speed,
             runaway_speed_m_s: self.runaway_speed,
             dt_s: self.last_dt,
             stability_bound_s: self.stepper.bound.dt().0,
             viscous_velocity: self.viscous_velocity,
-        })
+            non_finite,
+        }
     }
 }

@@ -17,7 +17,8 @@ pub struct StateFigures {
     /// compressibility that the sound speed bounds. A density deficit (a free surface's kernel
     /// sum cut off, or a particle flying alone) is not compression and is not counted.
     pub max_compression: f64,
-    /// Fluid particles with a non-finite velocity or a speed above the runaway limit.
+    /// Fluid particles with a non-finite velocity or density, or a speed above the runaway
+    /// limit.
     pub bad_particles: u64,
 }
 
@@ -58,13 +59,14 @@ pub fn particle_figures<R: Real>(i: usize, a: &DiagnosticsArgs<R>) -> StateFigur
     let [x, y, z] = a.velocity.at(i);
     let (x, y, z) = (x.to_f64(), y.to_f64(), z.to_f64());
     let speed2 = x * x + y * y + z * z;
-    let finite = speed2.is_finite();
     let rho0 = a.fluid.rest_density.to_f64();
-    let excess = a.density.at(i).to_f64() - rho0;
+    let density = a.density.at(i).to_f64();
+    let (finite, finite_density) = (speed2.is_finite(), density.is_finite());
+    let excess = if finite_density { density - rho0 } else { 0.0 };
     StateFigures {
         max_speed: if finite { Real::sqrt(speed2) } else { 0.0 },
         max_compression: if excess > 0.0 { excess / rho0 } else { 0.0 },
-        bad_particles: u64::from(!finite || speed2 > a.runaway_speed2),
+        bad_particles: u64::from(!finite || !finite_density || speed2 > a.runaway_speed2),
     }
 }
 

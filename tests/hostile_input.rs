@@ -1,0 +1,548 @@
+//! Input as a hostile but fair user gives it: every value is bounded and means something, and
+//! nothing crashes, hangs, writes a non-finite frame or writes outside the output folder.
+
+mod common;
+
+use coil::run::RunError;
+use coil::scene::particle_limit::ParticleLimit;
+use coil::scene::setup::{initial_particles, initial_particles_within};
+use coil::scene::{Scene, SceneError};
+use common::{coil, quiet_run_options, set};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+fn shipped(name: &str) -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)).expect("a shipped scene")
+}
+
+/// A temporary folder of this test process.
+fn temp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("coil-hostile-{name}-{}", std::process::id()))
+}
+
+/// The error of `text` with `overrides`, refused at load.
+fn refused(text: &str, overrides: &[&str]) -> SceneError {
+    Scene::parse(&set(text, overrides), "s.toml").map(|_| ()).expect_err(&format!("{overrides:?} was accepted"))
+}
+
+/// The error of `scene`, valid at load, refused when its particles are made.
+fn refused_at_setup(scene: &Scene) -> SceneError {
+    initial_particles(scene, "s.toml").map(|_| ()).expect_err("the scene's particles were made")
+}
+
+/// Each `(override, field, words)` is refused at load, naming `field`, with `words` in the reason
+/// and every number printed short.
+fn each_refused(text: &str, cases: &[(&str, &str, &str)]) {
+    for &(o, field, words) in cases {
+        let e = refused(text, &[o]);
+        assert!(e.file == "s.toml" && e.field == field && e.reason.contains(words), "{o}: {e}");
+        assert!(!e.reason.contains("0000000000"), "{o}: a number printed long: {e}");
+    }
+}
+
+/// A run's length is bounded before anything is allocated: an end time that would take more
+/// steps than a machine can make (the round jet's dt is 8e-6 s), or more frames than may be
+/// written, is refused naming the field, as are two frame intervals at once.
+#[test]
+fn runs_too_long_and_frames_too_many_are_refused_before_anything_is_allocated() {
+    let jet = shipped("round_jet.toml");
+    each_refused(
+        &jet,
+        &[
+            ("simulation.end_time_s=1e9", "simulation.end_time_s", "steps"),
+            ("output.every_s=1e-12", "output.every_s", "frames"),
+            ("output.every_s=1e-18", "output.every_s", "frames"),
+            ("output.every_steps=5", "output.every_steps", "keep one of them"),
+            ("simulation.time_step.fixed_s=1e-30", "simulation.time_step.fixed_s", "steps"),
+            ("simulation.time_step.safety_factor=1e-300", "simulation.time_step.safety_factor", "steps"),
+        ],
+    );
+    let out = temp("long");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/round_jet.toml");
+    let started = Instant::now();
+    let r = coil(&[
+        "run",
+        scene.to_str().expect("utf-8"),
+        "--quiet",
+        "--out",
+        out.to_str().expect("utf-8"),
+        "--set",
+        "simulation.end_time_s=1e9",
+    ]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("simulation.end_time_s") && !stderr.contains("panicked"), "{stderr}");
+    assert!(started.elapsed() < Duration::from_secs(30), "refused only after {:?}", started.elapsed());
+    assert!(!out.exists(), "a refused scene created its output folder");
+}
+
+/// Numbers that no run can make sense of are refused naming their field: not finite, or out of
+/// the range where the physics holds and f32 arithmetic stays finite.
+#[test]
+fn numbers_without_meaning_are_refused_naming_the_field() {
+    let jet = shipped("round_jet.toml");
+    each_refused(
+        &jet,
+        &[
+            ("material.particle_spacing_m=1e308", "material.particle_spacing_m", "support radius"),
+            ("material.particle_spacing_m=1e-5", "material.particle_spacing_m", "f32"),
+            ("material.viscosity.nu0_m2_s=1e308", "material.viscosity.nu0_m2_s", "1e308"),
+            ("material.sound_speed_m_s=1e30", "material.sound_speed_m_s", "1e30"),
+            ("material.rest_density_kg_m3=1e308", "material.rest_density_kg_m3", "kg/m^3"),
+            ("material.rest_density_kg_m3=1e-308", "material.rest_density_kg_m3", "kg/m^3"),
+            ("material.viscosity.cross_k_s=1e300", "material.viscosity.cross_k_s", "1e300"),
+            ("material.viscosity.cross_n=1e9", "material.viscosity.cross_n", "at most"),
+            ("material.gravity_m_s2=[0.0, -1e308, 0.0]", "material.gravity_m_s2", "beyond any liquid"),
+            ("inlet[0].speed_m_s=1e308", "inlet[0].speed_m_s", "at most"),
+            ("inlet[0].start_s=nan", "inlet[0].start_s", "finite"),
+            ("inlet[0].start_s=0.9", "inlet[0].start_s", "before simulation.end_time_s"),
+            ("inlet[0].stop_s=-1.0", "inlet[0].stop_s", "after start_s"),
+            ("inlet[0].motion={ velocity_m_s = [nan, 0.0, 0.0] }", "inlet[0].motion.velocity_m_s", "finite"),
+            ("inlet[0].motion={ velocity_m_s = [1e308, 0.0, 0.0] }", "inlet[0].motion.velocity_m_s", "beyond any liquid"),
+            ("material.gravity_m_s2=[0.0, -9.8, 0.0, 0.0]", "material.gravity_m_s2", "must have 3 elements, got 4"),
+            ("inlet[0].position_m=[0.0, 0.2, 0.0, 0.0, 0.0]", "inlet[0].position_m", "must have 3 elements, got 5"),
+            ("domain.max_m=[0.07, 0.23]", "domain.max_m", "length 2, expected an array of length 3"),
+        ],
+    );
+    let dam = shipped("dam_break.toml");
+    each_refused(
+        &dam,
+        &[
+            ("fluid_block[0].velocity_m_s=[nan, 0.0, 0.0]", "fluid_block[0].velocity_m_s", "finite"),
+            ("fluid_block[0].velocity_m_s=[1e308, 0.0, 0.0]", "fluid_block[0].velocity_m_s", "beyond any liquid"),
+        ],
+    );
+    // A number TOML cannot hold is named as such, not taken for a string.
+    for value in ["1e400", "18446744073709551616"] {
+        let e = coil::scene::overrides::Override::parse(&format!("simulation.end_time_s={value}")).expect_err(value);
+        assert!(e.reason.contains("out of range"), "{value}: {e}");
+    }
+    // f32 holds the kernels of h = 2e-5 m no longer; f64 does, and a run asked for in f32 is
+    // refused though the file says f64.
+    let fine = set(&jet, &["material.particle_spacing_m=1e-5", "simulation.precision=\"f64\""]);
+    match Scene::parse(&fine, "s.toml") {
+        Err(e) => assert!(e.field != "material.particle_spacing_m", "refused in f64: {e}"),
+        Ok(scene) => {
+            let e = scene.check_precision(coil::scene::Precision::F32, "s.toml").expect_err("h = 2e-5 m in f32");
+            assert!(e.field == "material.particle_spacing_m" && e.reason.contains("f32"), "{e}");
+        }
+    }
+}
+
+/// The scene's name becomes the output folder and the series' file: only a plain file name is
+/// accepted, and a refused scene writes nothing, inside the output folder or out of it.
+#[test]
+fn a_name_that_is_a_path_is_refused_and_nothing_is_written_outside_the_output_folder() {
+    let dam = shipped("dam_break.toml");
+    for name in ["/tmp/coil-escape", "../../coil-escape", "", ".hidden", "a/b", "a\\\\b"] {
+        let e = refused(&dam, &[&format!("name=\"{name}\"")]);
+        assert!(e.field == "name" && e.reason.contains("plain file name"), "{name:?}: {e}");
+    }
+    let dir = temp("name");
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let scene = dir.join("escape.toml");
+    std::fs::write(&scene, set(&dam, &["name=\"../../escape\""])).expect("write");
+    let r = coil(&["run", scene.to_str().expect("utf-8"), "--quiet", "--out", dir.join("out").to_str().expect("utf-8")]);
+    assert_eq!(r.status.code(), Some(2), "{}", String::from_utf8_lossy(&r.stderr));
+    let entries: Vec<_> = std::fs::read_dir(&dir).expect("dir").map(|e| e.expect("entry").file_name()).collect();
+    assert_eq!(entries, vec![std::ffi::OsString::from("escape.toml")], "the refused run wrote {entries:?}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Scenes valid field by field that cannot do what they seem to ask are refused when their
+/// particles are made, naming what is wrong.
+#[test]
+fn scenes_that_cannot_do_what_they_ask_are_refused() {
+    let dam = Scene::parse(&shipped("dam_break.toml"), "s.toml").expect("the dam break");
+    let jet = Scene::parse(&shipped("round_jet.toml"), "s.toml").expect("the round jet");
+    let torus = Scene::parse(&shipped("torus.toml"), "s.toml").expect("the torus");
+    let expect = |scene: &Scene, field: &str, words: &str| {
+        let e = refused_at_setup(scene);
+        assert!(e.field == field && e.reason.contains(words), "expected {field}: {words}, got {e}");
+    };
+    let mut empty = dam.clone();
+    empty.fluid_blocks.clear();
+    expect(&empty, "(scene)", "has no fluid");
+
+    let mut no_room = jet.clone();
+    no_room.simulation.max_fluid_particles = Some(0);
+    expect(&no_room, "simulation.max_fluid_particles", "inject nothing");
+
+    let mut twice = dam.clone();
+    twice.fluid_blocks.push(twice.fluid_blocks[0]);
+    expect(&twice, "fluid_block[1]", "overlaps the fluid of an earlier shape");
+
+    let mut two_plates = jet.clone();
+    two_plates.boundaries.push(two_plates.boundaries[0]);
+    expect(&two_plates, "boundary[1]", "overlap an earlier boundary");
+
+    // The torus's tube (r = 0.08 m) centred on the plate's top surface.
+    let mut through = torus.clone();
+    through.fluid_tori[0].centre_m[1] = 0.0;
+    expect(&through, "fluid_torus[0]", "wall");
+
+    let mut wide = jet.clone();
+    if let coil::scene::Nozzle::Circle { radius_m } = &mut wide.inlets[0].nozzle {
+        *radius_m = 0.1;
+    }
+    expect(&wide, "inlet[0]", "outside the domain box");
+
+    // The exit a spacing below the plate's surface, in its walls.
+    let mut in_plate = jet.clone();
+    in_plate.inlets[0].position_m = [0.0, -0.004, 0.0];
+    expect(&in_plate, "inlet[0]", "walls of boundary[0]");
+}
+
+/// `coil check` says when the fluid capacity stops the inlets, and what the end time needs; it
+/// takes only the calibration it is given, and refuses one that is not a time.
+#[test]
+fn check_warns_of_a_capacity_that_stalls_the_inlets_and_refuses_a_calibration_that_is_not_a_time() {
+    let jet = Scene::parse(&set(&shipped("round_jet.toml"), &["simulation.max_fluid_particles=1000"]), "s.toml")
+        .expect("a smaller capacity");
+    let report = coil::scene::check::check(&jet, "s.toml", None, Duration::ZERO).expect("checked");
+    let (t, needed) = report.capacity_full.expect("1000 particles fill before 0.8 s");
+    assert!(t > 0.0 && t < 0.8 && needed > 1000, "{report}");
+    assert!(report.to_string().contains("warning            the capacity fills"), "{report}");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/round_jet.toml");
+    for bad in ["nan", "-1", "inf", "0"] {
+        let r = coil(&["check", scene.to_str().expect("utf-8"), &format!("--calibrate-s={bad}")]);
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{bad}: {stderr}");
+        assert!(stderr.contains("--calibrate-s") && !stderr.contains("panicked"), "{bad}: {stderr}");
+    }
+}
+
+/// A scene file is read up to a limit: an endless one is refused, not read until memory runs
+/// out.
+#[test]
+fn an_endless_scene_file_is_refused_at_its_size_limit() {
+    let r = coil(&["check", "/dev/zero"]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("/dev/zero") && stderr.contains("longer than"), "{stderr}");
+}
+
+/// Two runs never share an output folder: the second is refused while the first holds it.
+#[test]
+fn a_folder_in_use_by_another_run_is_refused() {
+    let out = temp("lock");
+    std::fs::create_dir_all(&out).expect("folder");
+    let held = coil::run::folder::lock(&out).expect("lockable").expect("free");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    let args = ["run", scene.to_str().expect("utf-8"), "--quiet", "--out", out.to_str().expect("utf-8")];
+    let r = coil(&args);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("in use by another coil run"), "{stderr}");
+    let resumed = coil(&["resume", out.to_str().expect("utf-8")]);
+    assert_eq!(resumed.status.code(), Some(2), "{}", String::from_utf8_lossy(&resumed.stderr));
+    drop(held);
+    std::fs::remove_dir_all(&out).ok();
+}
+
+/// `coil resume` checks the frames it keeps against their sizes and digests in the checkpoint:
+/// a frame deleted, cut short or replaced is named, with the command that starts over; a run
+/// killed before its first checkpoint is told the same.
+#[test]
+fn resume_refuses_a_run_whose_earlier_frames_were_changed() {
+    let out = temp("frames");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    let done = coil(&[
+        "run",
+        scene.to_str().expect("utf-8"),
+        "--quiet",
+        "--out",
+        out.to_str().expect("utf-8"),
+        "--set",
+        "simulation.end_time_s=0.004",
+        "--set",
+        "output.every_s=0.002",
+    ]);
+    assert!(done.status.success(), "{}", String::from_utf8_lossy(&done.stderr));
+    let frame = out.join("frame_000001.vtu");
+    let whole = std::fs::read(&frame).expect("a frame");
+    let resume = || coil(&["resume", out.to_str().expect("utf-8"), "--quiet", "--set", "simulation.end_time_s=0.006"]);
+    let refused = |expected: &str| {
+        let r = resume();
+        let stderr = String::from_utf8_lossy(&r.stderr).into_owned();
+        assert_eq!(r.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains("frame_000001.vtu") && stderr.contains(expected), "{stderr}");
+        assert!(stderr.contains("--overwrite"), "{stderr}");
+    };
+    std::fs::remove_file(&frame).expect("deleted");
+    refused("cannot be read");
+    std::fs::write(&frame, &whole[..whole.len() / 2]).expect("cut short");
+    refused("bytes where the run wrote");
+    let mut replaced = whole.clone();
+    let last = replaced.len() - 30;
+    replaced[last] ^= 1;
+    std::fs::write(&frame, &replaced).expect("replaced");
+    refused("was changed");
+    std::fs::write(&frame, &whole).expect("put back");
+    let r = resume();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    std::fs::remove_file(out.join("checkpoint.bin")).expect("as if killed before its first checkpoint");
+    let r = resume();
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.code() == Some(2) && stderr.contains("is missing") && stderr.contains("--overwrite"), "{stderr}");
+    std::fs::remove_dir_all(&out).ok();
+}
+
+/// The guard reads density as well as speed, and no frame holding a value that is not finite
+/// is written: the frame refuses it as an instability, naming the field and the particle.
+#[test]
+fn a_non_finite_value_stops_the_run_before_a_frame_holds_it() {
+    use coil::simulation::model::StressModel;
+    use coil::simulation::Simulation;
+    use coil_kernels::cross_viscosity::Newtonian;
+    let scene = Scene::parse(&shipped("dam_break.toml"), "s.toml").expect("the dam break");
+    let initial = initial_particles(&scene, "s.toml").expect("particles");
+    let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.05 }));
+    sim.step().expect("a step");
+    let mut frame = coil::output::frame::Frame::default();
+    frame.capture(&sim.run, sim.host());
+    assert!(frame.non_finite().is_none());
+    frame.viscosity[3] = f32::NAN;
+    frame.density[5] = f32::INFINITY;
+    let (particles, first) = frame.non_finite().expect("found");
+    assert_eq!(particles, 2);
+    assert!(first.starts_with("viscosity of particle") && first.ends_with("NaN"), "{first}");
+
+    use coil_kernels::diagnostics::{particle_figures, DiagnosticsArgs};
+    use coil_kernels::view::{Vec3View, View};
+    let fluid = sim.run.fluid;
+    // A fluid particle at rest whose density is NaN.
+    let (id, v, density) = ([fluid.boundary_count], [0.0f64], [f64::NAN]);
+    let args = DiagnosticsArgs {
+        fluid,
+        runaway_speed2: 1.0,
+        id: View::new(&id),
+        velocity: Vec3View::new(&v, &v, &v),
+        density: View::new(&density),
+    };
+    assert_eq!(particle_figures(0, &args).bad_particles, 1, "a NaN density passed the guard");
+}
+
+/// Mutations of a shipped scene as a user might make them.
+enum Mutation {
+    /// A number replaced by another.
+    Number(String, String),
+    /// A value replaced by one of another type.
+    Type(String, String),
+    /// An array one element longer or shorter.
+    Length(String, bool),
+    Delete(String),
+    Name(String),
+    /// A line of the text repeated.
+    Duplicate(usize),
+}
+
+/// Every leaf of `value` as `--set` spells its key.
+fn leaves(value: &toml::Value, path: String, out: &mut Vec<(String, toml::Value)>) {
+    match value {
+        toml::Value::Table(t) => {
+            for (k, v) in t {
+                leaves(v, if path.is_empty() { k.clone() } else { format!("{path}.{k}") }, out);
+            }
+        }
+        toml::Value::Array(items) if items.iter().all(toml::Value::is_table) && !items.is_empty() => {
+            for (k, v) in items.iter().enumerate() {
+                leaves(v, format!("{path}[{k}]"), out);
+            }
+        }
+        v => out.push((path, v.clone())),
+    }
+}
+
+fn pick<'a, T>(items: &'a [T], state: &mut u64) -> &'a T {
+    &items[(common::uniform(state) * items.len() as f64) as usize % items.len()]
+}
+
+fn mutation(text: &str, state: &mut u64) -> Mutation {
+    let mut all = Vec::new();
+    leaves(&toml::Value::Table(toml::from_str(text).expect("a shipped scene")), String::new(), &mut all);
+    all.retain(|(k, _)| !k.starts_with("variant") && k != "notes" && k != "description");
+    let (key, value) = pick(&all, state).clone();
+    let numbers = |x: f64| {
+        [
+            "nan".into(),
+            "inf".into(),
+            "-inf".into(),
+            "0.0".into(),
+            format!("{:e}", -x),
+            "1e308".into(),
+            "-1e308".into(),
+            "1e-308".into(),
+            format!("{:e}", x * 1e6),
+            format!("{:e}", x * 1e-6),
+            format!("{:e}", x * 3.0),
+            format!("{:e}", x * 0.3),
+            "9223372036854775807".into(),
+        ]
+    };
+    match (common::uniform(state) * 10.0) as u32 {
+        0 => Mutation::Type(key, pick(&["\"text\"", "true", "{ a = 1 }", "[]"], state).to_string()),
+        1 => Mutation::Delete(key),
+        2 => Mutation::Name(pick(&["\"/tmp/abs\"", "\"../../up\"", "\"\"", "\".hid\"", "\"a/b\""], state).to_string()),
+        3 => Mutation::Duplicate((common::uniform(state) * text.lines().count() as f64) as usize),
+        4 if value.is_array() => Mutation::Length(key, common::uniform(state) < 0.5),
+        _ => match &value {
+            toml::Value::Float(x) => Mutation::Number(key, pick(&numbers(*x), state).clone()),
+            toml::Value::Integer(i) => Mutation::Number(key, pick(&numbers(*i as f64), state).clone()),
+            toml::Value::Array(items) if !items.is_empty() => {
+                let k = (common::uniform(state) * items.len() as f64) as usize % items.len();
+                let x = items[k].as_float().or(items[k].as_integer().map(|i| i as f64)).unwrap_or(1.0);
+                let mut items = items.clone();
+                items[k] = toml::from_str::<toml::Table>(&format!("v = {}", pick(&numbers(x), state)))
+                    .map(|mut t| t.remove("v").expect("v"))
+                    .unwrap_or(toml::Value::Float(f64::NAN));
+                Mutation::Number(key, toml::Value::Array(items).to_string())
+            }
+            _ => Mutation::Type(key, "1.5".into()),
+        },
+    }
+}
+
+/// The scene text after `m`.
+fn mutated(text: &str, m: &Mutation) -> String {
+    let mut table: toml::Table = toml::from_str(text).expect("a shipped scene");
+    let value = |v: &str| toml::from_str::<toml::Table>(&format!("v = {v}")).expect("a value").remove("v").expect("v");
+    let edit = |table: &mut toml::Table, key: &str, f: &dyn Fn(&mut toml::Table, &str)| {
+        let mut t = table;
+        let parts: Vec<&str> = key.split('.').collect();
+        for part in &parts[..parts.len() - 1] {
+            t = match part.split_once('[') {
+                None => t.get_mut(*part).and_then(toml::Value::as_table_mut).expect("a table"),
+                Some((name, i)) => {
+                    let i: usize = i.trim_end_matches(']').parse().expect("an index");
+                    t.get_mut(name).and_then(|a| a.as_array_mut()).and_then(|a| a[i].as_table_mut()).expect("an entry")
+                }
+            };
+        }
+        f(t, parts[parts.len() - 1]);
+    };
+    match m {
+        Mutation::Number(key, v) | Mutation::Type(key, v) => edit(&mut table, key, &|t, k| {
+            t.insert(k.into(), value(v));
+        }),
+        Mutation::Delete(key) => edit(&mut table, key, &|t, k| {
+            t.remove(k);
+        }),
+        Mutation::Length(key, longer) => edit(&mut table, key, &|t, k| {
+            let a = t.get_mut(k).and_then(toml::Value::as_array_mut).expect("an array");
+            if *longer {
+                let last = a.last().cloned().unwrap_or(toml::Value::Float(0.0));
+                a.push(last);
+            } else {
+                a.pop();
+            }
+        }),
+        Mutation::Name(name) => {
+            table.insert("name".into(), value(name));
+        }
+        Mutation::Duplicate(line) => {
+            let lines: Vec<&str> = text.lines().collect();
+            let mut out: Vec<&str> = lines.clone();
+            out.insert(*line, lines[*line]);
+            return out.join("\n");
+        }
+    }
+    toml::to_string(&table).expect("a table serialises")
+}
+
+/// What became of a mutated scene.
+enum Outcome {
+    Refused(SceneError),
+    /// It ran a few steps, writing these frames.
+    Ran(Vec<PathBuf>),
+    /// Valid, but larger than this test runs.
+    TooLarge,
+}
+
+/// Loads `text` as `coil run` does, checks it, and runs a few steps of it into `out`, a frame
+/// each step.
+fn try_scene(text: &str, out: &Path) -> Outcome {
+    let scene = match Scene::parse(text, "fuzz.toml") {
+        Err(e) => return Outcome::Refused(e),
+        Ok(scene) => scene,
+    };
+    let d = &scene.domain;
+    let cells: f64 = (0..3).map(|a| ((d.max_m[a] - d.min_m[a]) / scene.support_radius()).ceil()).product();
+    if cells > 2e6 {
+        return Outcome::TooLarge;
+    }
+    let small = ParticleLimit { most: 60_000.0, why: "the fuzz test's limit".into() };
+    match initial_particles_within(&scene, "fuzz.toml", &small) {
+        Err(e) if e.reason.contains(&small.why) => return Outcome::TooLarge,
+        Err(e) => return Outcome::Refused(e),
+        Ok(_) if scene.simulation.max_fluid_particles.is_some_and(|m| m as f64 > small.most) => return Outcome::TooLarge,
+        Ok(_) => {}
+    }
+    if let Err(e) = coil::scene::check::check(&scene, "fuzz.toml", None, Duration::ZERO) {
+        return Outcome::Refused(e);
+    }
+    let mut scene = scene;
+    let h = scene.support_radius();
+    let v = scene.material.viscosity;
+    let (bound, _) =
+        coil::simulation::time_step::StabilityBound::new(h, scene.material.sound_speed_m_s, v.nu0_m2_s.max(v.nu_inf())).dt();
+    let dt = scene.simulation.time_step.fixed_s.unwrap_or(bound * scene.simulation.time_step.safety_factor);
+    scene.simulation.end_time_s = scene.simulation.end_time_s.min(3.5 * dt);
+    scene.output.every_s = None;
+    scene.output.every_steps = Some(1);
+    std::fs::remove_dir_all(out).ok();
+    match coil::run::run_on(None, &scene, "fuzz.toml", &quiet_run_options(out)) {
+        Ok(_) | Err(RunError::Unstable(..)) => {}
+        Err(RunError::Scene(e)) => return Outcome::Refused(e),
+        Err(e) => panic!("{e}"),
+    }
+    let mut frames: Vec<PathBuf> = std::fs::read_dir(out)
+        .expect("the output folder")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|x| x == "vtu") && p.file_name().is_some_and(|n| n != "boundary.vtu"))
+        .collect();
+    frames.sort();
+    Outcome::Ran(frames)
+}
+
+/// Mutated shipped scenes (numbers, types, array lengths, deleted and repeated keys, names),
+/// from a fixed seed: each is either refused naming a field, or checked and run for a few
+/// steps writing only finite frames; none panics or takes long.
+#[test]
+fn mutated_scenes_are_refused_naming_a_field_or_run_writing_only_finite_frames() {
+    let out = temp("fuzz");
+    let mut state = 0x5eed_c011_u64;
+    let (mut refused, mut ran) = (0, 0);
+    for name in ["round_jet.toml", "dam_break.toml", "torus.toml", "moving_jet.toml", "rectangular_jet.toml"] {
+        let text = shipped(name);
+        for _ in 0..100 {
+            let m = mutation(&text, &mut state);
+            let scene = mutated(&text, &m);
+            let started = Instant::now();
+            let outcome =
+                std::panic::catch_unwind(|| try_scene(&scene, &out)).unwrap_or_else(|_| panic!("{name}: panicked on\n{scene}"));
+            assert!(started.elapsed() < Duration::from_secs(20), "{name}: took {:?} on\n{scene}", started.elapsed());
+            match outcome {
+                Outcome::Refused(e) => {
+                    assert!(!e.field.is_empty() && !e.reason.is_empty(), "{name}: {e}");
+                    refused += 1;
+                }
+                Outcome::Ran(frames) => {
+                    assert!(!frames.is_empty(), "{name}: no frame written for\n{scene}");
+                    for frame in frames {
+                        let data = coil::output::vtu_read::read_frame(&frame).expect("a whole frame");
+                        let finite = data.position.iter().flatten().all(|x| x.is_finite())
+                            && data.scalars.values().flatten().all(|x| x.is_finite())
+                            && data.vectors.values().flatten().flatten().all(|x| x.is_finite());
+                        assert!(finite, "{name}: {} holds a non-finite value; scene\n{scene}", frame.display());
+                    }
+                    ran += 1;
+                }
+                Outcome::TooLarge => {}
+            }
+        }
+    }
+    std::fs::remove_dir_all(&out).ok();
+    eprintln!("{refused} mutated scenes refused, {ran} run");
+    assert!(refused > 100 && ran > 50, "refused {refused}, ran {ran}: the mutations should reach both outcomes");
+}
