@@ -112,6 +112,10 @@ fn numbers_without_meaning_are_refused_naming_the_field() {
             ("fluid_block[0].velocity_m_s=[1e308, 0.0, 0.0]", "fluid_block[0].velocity_m_s", "beyond any liquid"),
         ],
     );
+    // A missing field is named itself, not the table that lacks it.
+    let without: String = jet.lines().filter(|l| !l.starts_with("end_time_s")).collect::<Vec<_>>().join("\n");
+    let e = Scene::parse(&without, "s.toml").map(|_| ()).expect_err("no end time");
+    assert!(e.field == "simulation.end_time_s" && e.reason.contains("missing field"), "{e}");
     // A number TOML cannot hold is named as such, not taken for a string.
     for value in ["1e400", "18446744073709551616"] {
         let e = coil::scene::overrides::Override::parse(&format!("simulation.end_time_s={value}")).expect_err(value);

@@ -19,6 +19,8 @@ pub struct Snapshot {
     pub velocity: Vec<[f64; 3]>,
     /// Pressure by Eq. (6) (Pa).
     pub pressure: Vec<f64>,
+    /// Density (kg/m^3).
+    pub density: Vec<f64>,
 }
 
 impl Snapshot {
@@ -84,6 +86,7 @@ fn snapshot<R: Real, M: Model<R>>(sim: &Simulation<R, M>) -> Snapshot {
         s.position.push([0, 1, 2].map(|a| p.position[a][i]));
         s.velocity.push([0, 1, 2].map(|a| p.velocity[a][i].to_f64()));
         s.pressure.push(pressure(p.density[i], &sim.run.fluid).to_f64());
+        s.density.push(p.density[i].to_f64());
     }
     s
 }
