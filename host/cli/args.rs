@@ -148,16 +148,17 @@ pub enum Command {
     /// Compare coil with published references (start-up Poiseuille flow against Morris et al.
     /// 1997 with each viscosity operator, steady Poiseuille flow of Cross fluids, a hydrostatic
     /// tank, the Taylor-Green vortex, the spreading torus of Fig. 3, Huppert's viscous
-    /// spreading, and jet buckling from high and low nozzles), print each error next to its
+    /// spreading, a viscous thread falling freely against the slender-thread solution, and jet
+    /// buckling from high and low nozzles), print each error next to its
     /// tolerance, and plot simulated against reference profiles (PNG, SVG, CSV). Exits 1 when a
     /// binding case fails; the paper's operator below the binding resolution and on the Cross
     /// cases is shown for comparison.
     Validate {
-        /// Coarser resolutions and no jets: about 5 minutes on 2 cores, against about 40 minutes.
+        /// Coarser resolutions and no jets: about 10 minutes on 2 cores; the full set takes hours.
         #[arg(long)]
         quick: bool,
         /// Run only these groups of cases (comma-separated): poiseuille, cross, tank,
-        /// taylor-green, torus, huppert, jet (not with --quick).
+        /// taylor-green, torus, huppert, thread, jet (not with --quick).
         #[arg(long, value_delimiter = ',')]
         only: Vec<coil::validation::suite::Group>,
         /// Output folder for plots and validate.md.

@@ -77,7 +77,7 @@ impl fmt::Display for Verdict {
     }
 }
 
-/// The cases of the suite, quick (about 5 minutes on 2 cores) or full; plots go to `out`.
+/// The cases of the suite, quick (about 10 minutes on 2 cores) or full (hours); plots go to `out`.
 ///
 /// The rule of which cases bind: the paper's operator is held to its tolerance at 30 particles
 /// across (40 for the vortex); coarser runs show its convergence, and its Cross cases, which its
