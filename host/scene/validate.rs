@@ -43,7 +43,7 @@ impl Scene {
             reason: format!("cannot be written out: {e}"),
         })?;
         match first_length_mismatch(&Value::Table(given.clone()), &written, String::new()) {
-            Some((field, got, expected)) => check.fail(&field, format!("must have {expected} elements, got {got}")).map(|_| ()),
+            Some((field, got, expected)) => check.fail(&field, format!("must have {expected} elements, got {got}")),
             None => Ok(()),
         }
     }
