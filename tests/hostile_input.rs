@@ -52,11 +52,16 @@ fn runs_too_long_and_frames_too_many_are_refused_before_anything_is_allocated() 
             ("simulation.end_time_s=1e9", "simulation.end_time_s", "steps"),
             ("output.every_s=1e-12", "output.every_s", "frames"),
             ("output.every_s=1e-18", "output.every_s", "frames"),
-            ("output.every_steps=5", "output.every_steps", "keep one of them"),
             ("simulation.time_step.fixed_s=1e-30", "simulation.time_step.fixed_s", "steps"),
             ("simulation.time_step.safety_factor=1e-300", "simulation.time_step.safety_factor", "steps"),
         ],
     );
+    // A file may give one frame interval; a --set of the other replaces it.
+    let both = jet.replace("every_s = 0.02", "every_s = 0.02\nevery_steps = 5");
+    let e = Scene::parse(&both, "s.toml").map(|_| ()).expect_err("two frame intervals");
+    assert!(e.field == "output.every_steps" && e.reason.contains("keep one of them"), "{e}");
+    let by_steps = Scene::parse(&set(&jet, &["output.every_steps=5"]), "s.toml").expect("every_steps replaces every_s");
+    assert_eq!((by_steps.output.every_s, by_steps.output.every_steps), (None, Some(5)));
     let out = temp("long");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/round_jet.toml");
     let started = Instant::now();

@@ -244,7 +244,7 @@ fn run_files(dir: &std::path::Path) -> Vec<(String, Vec<u8>)> {
     let mut files: Vec<_> = std::fs::read_dir(dir)
         .expect("output folder")
         .map(|e| e.expect("entry").path())
-        .filter(|p| !p.ends_with("run.json") && !p.ends_with("checkpoint.bin"))
+        .filter(|p| !p.ends_with("run.json") && !p.ends_with("checkpoint.bin") && !p.ends_with("run.lock"))
         .map(|p| (p.file_name().expect("a name").to_string_lossy().into_owned(), std::fs::read(&p).expect("readable")))
         .collect();
     files.sort();

@@ -103,6 +103,10 @@ impl Override {
     }
 }
 
+/// Fields of a section of which a scene gives one or the other: an override of one removes the
+/// other, so that `--set output.every_steps=1` works on a scene that writes by time.
+const EITHER: [(&str, &str, &str); 1] = [("output", "every_s", "every_steps")];
+
 /// Scene text with `overrides` applied in order, as TOML text again.
 pub fn apply(text: &str, file: &str, overrides: &[Override]) -> Result<String, SceneError> {
     if overrides.is_empty() {
@@ -115,6 +119,20 @@ pub fn apply(text: &str, file: &str, overrides: &[Override]) -> Result<String, S
     })?;
     for o in overrides {
         o.apply(&mut table, file)?;
+        if let [Step::Key(section), Step::Key(name)] = o.path.as_slice() {
+            for &(s, a, b) in EITHER.iter().filter(|(s, ..)| s == section) {
+                let other = if name == a {
+                    b
+                } else if name == b {
+                    a
+                } else {
+                    continue;
+                };
+                if let Some(t) = table.get_mut(s).and_then(Value::as_table_mut) {
+                    t.remove(other);
+                }
+            }
+        }
     }
     Ok(toml::to_string(&table).expect("a TOML table serialises"))
 }
