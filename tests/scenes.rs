@@ -268,7 +268,7 @@ fn a_mistyped_field_is_named_as_set_spells_it() {
         ("precision = \"f32\"", "precision = \"f16\"", "simulation.precision", "unknown variant `f16`"),
         ("speed_m_s = 1.0", "speed_m_s = \"fast\"", "inlet[0].speed_m_s", "expected f64"),
         ("shape = \"circle\"", "shape = \"hexagon\"", "inlet[0].nozzle.shape", "unknown variant `hexagon`"),
-        ("particle_spacing_m = 0.004\n", "", "material", "missing field `particle_spacing_m`"),
+        ("particle_spacing_m = 0.004\n", "", "material.particle_spacing_m", "missing field `particle_spacing_m`"),
         ("[simulation]", "[simulation", "(syntax)", "table header"),
     ];
     for (from, to, field, reason) in cases {
@@ -477,6 +477,9 @@ shape = "plate"
 height_m = 0.0
 min_xz_m = [0.04, 0.04]
 max_xz_m = [0.16, 0.16]
+[[fluid_block]]
+min_m = [0.06, 0.0, 0.06]
+max_m = [0.14, 0.08, 0.14]
 "#;
     let p = coil::scene::setup::initial_particles(&common::scene(plate), "test.toml").expect("valid");
     assert!(!p.boundary.is_empty());
