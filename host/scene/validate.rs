@@ -9,11 +9,12 @@ use toml::Value;
 /// Rest densities a scene may give (kg/m^3): from a thin gas to past any liquid, so that the
 /// pressure c^2 rho0 and the pair terms m / rho^2 stay normal numbers in f32.
 pub const REST_DENSITY_KG_M3: (f64, f64) = (1e-3, 1e6);
-/// Sound speeds (m/s): the squares in Eq. (6) stay finite in f32 with any rest density above.
-pub const SOUND_SPEED_M_S: (f64, f64) = (1e-3, 1e5);
+/// Sound speeds (m/s): the squares in Eq. (6) stay finite and normal in f32 with any rest
+/// density above (a micro-channel's flow of 1e-5 m/s is run at c = 2.5e-4 m/s).
+pub const SOUND_SPEED_M_S: (f64, f64) = (1e-9, 1e5);
 /// Support radii h (m) in f32 and in f64: the kernels' coefficients 315 / (64 pi h^9) and
-/// 45 / (pi h^6) stay finite and normal.
-pub const SUPPORT_RADIUS_M_F32: (f64, f64) = (1e-4, 1e3);
+/// 45 / (pi h^6) stay finite and normal (in f32 the first overflows below h = 5.5e-5 m).
+pub const SUPPORT_RADIUS_M_F32: (f64, f64) = (7e-5, 1e3);
 pub const SUPPORT_RADIUS_M_F64: (f64, f64) = (1e-9, 1e9);
 /// Kinematic viscosities (m^2/s): from below water's to past pitch's.
 pub const VISCOSITY_M2_S: (f64, f64) = (1e-9, 1e9);
