@@ -555,3 +555,38 @@ fn mutated_scenes_are_refused_naming_a_field_or_run_writing_only_finite_frames()
     eprintln!("{refused} mutated scenes refused, {ran} run");
     assert!(refused > 100 && ran > 50, "refused {refused}, ran {ran}: the mutations should reach both outcomes");
 }
+
+/// A write that fails (here a frame's temporary name taken by a folder, as a full disk would
+/// fail it) ends the run with exit 1, naming the file; `run.json` logs the failure instead of
+/// "running", and no temporary file is left behind.
+#[test]
+fn a_failed_write_is_named_and_logged_and_leaves_no_temporary() {
+    let out = temp("write");
+    std::fs::create_dir_all(out.join("frame_000001.vtu.tmp")).expect("a folder where the frame's temporary goes");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    let r = coil(&[
+        "run",
+        scene.to_str().expect("utf-8"),
+        "--quiet",
+        "--out",
+        out.to_str().expect("utf-8"),
+        "--set",
+        "simulation.end_time_s=0.004",
+        "--set",
+        "output.every_s=0.002",
+    ]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("frame_000001.vtu") && !stderr.contains("run.json"), "{stderr}");
+    let log: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("the log")).expect("whole JSON");
+    assert_eq!(log["status"], "failed");
+    assert!(log["diagnosis"].as_str().is_some_and(|d| d.contains("frame_000001.vtu")), "{log}");
+    let temporaries: Vec<_> = std::fs::read_dir(&out)
+        .expect("the folder")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.is_file() && p.extension().is_some_and(|x| x == "tmp"))
+        .collect();
+    assert!(temporaries.is_empty(), "{temporaries:?}");
+    std::fs::remove_dir_all(&out).ok();
+}
