@@ -22,6 +22,7 @@ use coil::simulation::particles::Particles;
 use coil::simulation::Simulation;
 use coil_kernels::acceleration::AccelerationArgs;
 use coil_kernels::cell_grid::{HashArgs, Neighborhood};
+use coil_kernels::continuity_molteni2009::{ContinuityArgs, DensityIntegrationArgs};
 use coil_kernels::counting_sort::Counters;
 use coil_kernels::cross_viscosity::{Cross, Newtonian};
 use coil_kernels::density::DensityArgs;
@@ -83,6 +84,8 @@ fn ptx_entry_parameters_match_the_host_argument_layouts() {
         let mut add = |stem: &str, args: usize| expected.push((name(stem), vec![count, args]));
         add("density", size_of::<DensityArgs<R, Neighborhood<T>>>());
         add("density_spiky", size_of::<DensityArgs<R, Neighborhood<T>>>());
+        add("continuity", size_of::<ContinuityArgs<R, Neighborhood<T>>>());
+        add("continuity_spiky", size_of::<ContinuityArgs<R, Neighborhood<T>>>());
         add("stress_newtonian", size_of::<StressArgs<R, Newtonian<R>, Neighborhood<T>>>());
         add("stress_cross", size_of::<StressArgs<R, Cross<R>, Neighborhood<T>>>());
         add("acceleration_stress", size_of::<AccelerationArgs<R, StressDivergence<R>, Neighborhood<T>>>());
@@ -103,6 +106,7 @@ fn ptx_entry_parameters_match_the_host_argument_layouts() {
         let count = size_of::<Count>();
         let mut add = |name: String, sizes: Vec<usize>| expected.push((name, sizes));
         add(format!("nozzle_{r}"), vec![count, size_of::<NozzleArgs<R>>()]);
+        add(format!("density_integration_{r}"), vec![count, size_of::<DensityIntegrationArgs<R>>()]);
         add(format!("gather_{r}"), vec![count, size_of::<View<u32>>(), size_of::<View<R>>(), size_of::<ViewMut<R>>()]);
         add(format!("append_{r}"), vec![count, 4, size_of::<View<R>>(), size_of::<ViewMut<R>>()]);
         add(format!("diagnostics_{r}"), vec![count, 4, size_of::<DiagnosticsArgs<R>>(), size_of::<ViewMut<StateFigures>>()]);
@@ -402,6 +406,40 @@ fn a_jet_on_the_gpu_agrees_with_the_cpu() {
         let worst = largest_position_difference(&state_by_id(cpu.particles()), &state_by_id(on_gpu.particles()));
         println!("{engine:?}, jet: {} removed, largest position difference after 300 steps {worst:.3e} m", cpu.run.removed);
         assert!(worst <= engine.f64_tolerance_m(), "{engine:?}, jet: positions differ by {worst:.3e} m");
+    }
+}
+
+/// The jet with density from the continuity equation: its density is state that the sort
+/// gathers, the inlet appends at rho0 and two more passes integrate, so positions and densities
+/// agree as in the jet above.
+#[test]
+fn the_continuity_density_on_the_gpu_agrees_with_the_cpu() {
+    let mut scene = common::scene(&common::jet_scene("nozzle = { shape = \"circle\", radius_m = 0.004 }", ""));
+    scene.material.sound_speed_m_s = 2.0;
+    scene.material.gravity_m_s2 = [0.0, -9.81, 0.0];
+    scene.material.density_equation = coil::scene::DensityEquation::Continuity;
+    scene.domain.min_m = [-0.02; 3];
+    scene.domain.max_m = [0.02; 3];
+    scene.simulation.max_fluid_particles = Some(20_000);
+    let model = StressModel(Newtonian { nu0: 0.001 });
+    for engine in engines() {
+        let (cpu, on_gpu) = both_with::<f64, _>(engine.open(), &scene, model, 300, 2e-4);
+        assert!(cpu.run.removed > 0, "no particle left the domain: the test would not see the drop");
+        assert_eq!(on_gpu.run.fluid_count(), cpu.run.fluid_count(), "{engine:?}: fluid particles");
+        let worst = largest_position_difference(&state_by_id(cpu.particles()), &state_by_id(on_gpu.particles()));
+        let density_by_id = |p: &Particles<f64>| {
+            let mut d: Vec<(u32, f64)> = (0..p.len()).map(|i| (p.id[i], p.density[i])).collect();
+            d.sort_by_key(|e| e.0);
+            d
+        };
+        let (dc, dg) = (density_by_id(cpu.particles()), density_by_id(on_gpu.particles()));
+        let rho_worst =
+            dc.iter().zip(&dg).map(|(c, g)| if c.0 == g.0 { (c.1 - g.1).abs() } else { f64::INFINITY }).fold(0.0, f64::max);
+        let spread = dc.iter().map(|c| (c.1 - 1000.0).abs()).fold(0.0, f64::max);
+        println!("{engine:?}, continuity jet: largest position difference {worst:.3e} m, density {rho_worst:.3e} kg/m^3 (spread {spread:.3e})");
+        assert!(spread > 1e-3, "the density never left rho0: the test would not see it");
+        assert!(worst <= engine.f64_tolerance_m(), "{engine:?}, continuity jet: positions differ by {worst:.3e} m");
+        assert!(rho_worst <= 1e-9 * 1000.0, "{engine:?}, continuity jet: densities differ by {rho_worst:.3e} kg/m^3");
     }
 }
 

@@ -381,9 +381,16 @@ fn resume_refuses_what_it_cannot_continue() {
 /// A jet stopped mid-run by its program (the stop flag `coil run` sets on Ctrl-C) resumes to
 /// the frames of a run never stopped: the inlets' layers and wobble, the ids and the capacity's
 /// clock carry on from the checkpoint. The capacity fills during the run, so the stop must also
-/// carry the time it filled.
+/// carry the time it filled. With density from the continuity equation the checkpoint carries
+/// each particle's density too.
 #[test]
 fn a_jet_stopped_by_its_program_resumes_where_it_was() {
+    for density in [coil::scene::DensityEquation::Summation, coil::scene::DensityEquation::Continuity] {
+        jet_stopped_by_its_program_resumes_where_it_was(density);
+    }
+}
+
+fn jet_stopped_by_its_program_resumes_where_it_was(density: coil::scene::DensityEquation) {
     use std::sync::atomic::{AtomicBool, Ordering};
     let mut scene = common::scene(&common::jet_scene(
         r#"nozzle = { shape = "circle", radius_m = 0.004 }"#,
@@ -391,7 +398,8 @@ fn a_jet_stopped_by_its_program_resumes_where_it_was() {
     ));
     scene.simulation.end_time_s = 0.04;
     scene.simulation.max_fluid_particles = Some(80);
-    let dir = std::env::temp_dir().join(format!("coil-resume-jet-{}", std::process::id()));
+    scene.material.density_equation = density;
+    let dir = std::env::temp_dir().join(format!("coil-resume-jet-{density:?}-{}", std::process::id()));
     let (whole, stopped) = (dir.join("whole"), dir.join("stopped"));
     let done = coil::run::run_on(None, &scene, "jet.toml", &common::quiet_run_options(&whole)).expect("the whole run");
     let filled = done.capacity_reached.expect("the capacity fills").0;

@@ -13,6 +13,7 @@ use crate::simulation::particles::{
 use crate::simulation::Diagnostics;
 use coil_kernels::acceleration::{acceleration_pass, AccelerationArgs};
 use coil_kernels::cell_grid::Neighbors;
+use coil_kernels::continuity_molteni2009::{continuity_pass, density_integration_pass, ContinuityArgs, DensityIntegrationArgs};
 use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::density::{density_pass, DensityArgs, DensityKernel};
 use coil_kernels::diagnostics::{range_figures, DiagnosticsArgs};
@@ -78,6 +79,7 @@ impl<R: Real> CpuBackend<R> {
             velocity_half: vec3_view_mut(&mut p.velocity_half, n),
             acceleration: vec3_view_mut(&mut p.acceleration, n),
             density: view_mut(&mut p.density, n),
+            density_rate: p.density_rate.as_mut().map(|r| view_mut(r, n)),
             stress: p.stress.as_mut().map(|s| stress_view_mut(s, n)),
             viscosity: p.viscosity.as_mut().map(|v| view_mut(v, n)),
             velocity_gradient: p.velocity_gradient.as_mut().map(|g| mat3_view_mut(g, n)),
@@ -180,6 +182,12 @@ struct CpuPasses {
 impl<R: Real, T: Topology, N: Neighbors + Sync> Passes<R, T, N> for CpuPasses {
     fn density<K: DensityKernel>(&mut self, args: DensityArgs<'_, R, N>) {
         launch(self.n, |i| density_pass::<R, K, N>(i, &args));
+    }
+    fn continuity<K: DensityKernel>(&mut self, args: ContinuityArgs<'_, R, N>) {
+        launch(self.n, |i| continuity_pass::<R, K, N>(i, &args));
+    }
+    fn density_integration(&mut self, args: DensityIntegrationArgs<'_, R>) {
+        launch(self.n, |i| density_integration_pass(i, &args));
     }
     fn mirrored_wall(&mut self, args: MirroredWallArgs<'_, R, T>) {
         launch(self.n, |i| mirrored_wall_pass(i, &args));

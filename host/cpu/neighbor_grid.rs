@@ -234,7 +234,8 @@ impl NeighborGrid {
 }
 
 /// Permutes every field that carries state from step to step (positions, both velocities,
-/// ids) into sorted order; fields recomputed each step are left alone.
+/// ids, and density where the continuity equation integrates it) into sorted order; fields
+/// recomputed each step are left alone.
 fn reorder<R: Real>(p: &mut Particles<R>, order: View<u32>, live: usize) {
     fn permute<T: Copy + Send + Sync>(field: &mut Vec<T>, scratch: &mut Vec<T>, order: View<u32>, live: usize) {
         let unsorted = View::new(&field[..]);
@@ -248,5 +249,8 @@ fn reorder<R: Real>(p: &mut Particles<R>, order: View<u32>, live: usize) {
         permute(&mut p.velocity_half[a], &mut p.scratch_real, order, live);
     }
     permute(&mut p.id, &mut p.scratch_u32, order, live);
+    if p.density_is_state() {
+        permute(&mut p.density, &mut p.scratch_real, order, live);
+    }
     p.set_len(live);
 }

@@ -16,6 +16,7 @@ use crate::simulation::particles::{HostParticles, ModelFields, Particles};
 use crate::simulation::{Setup, Simulation, StepError};
 use coil_kernels::acceleration::AccelerationArgs;
 use coil_kernels::cell_grid::{HashArgs, Neighborhood};
+use coil_kernels::continuity_molteni2009::{ContinuityArgs, DensityIntegrationArgs};
 use coil_kernels::counting_sort::scan_levels_len;
 use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::density::{DensityArgs, DensityKernel};
@@ -55,6 +56,8 @@ struct DeviceState<R> {
     velocity_half: DeviceVec3<R>,
     acceleration: DeviceVec3<R>,
     density: DeviceArray<R>,
+    /// Where density comes from the continuity equation.
+    density_rate: Option<DeviceArray<R>>,
     id: DeviceArray<u32>,
     stress: Option<[DeviceArray<R>; 6]>,
     viscosity: Option<DeviceArray<R>>,
@@ -77,6 +80,8 @@ struct DeviceState<R> {
     staged_position: DeviceVec3<f64>,
     staged_velocity: DeviceVec3<R>,
     staged_id: DeviceArray<u32>,
+    /// The layers' density, where density comes from the continuity equation.
+    staged_density: Option<DeviceArray<R>>,
     /// One `StateFigures` per diagnostics range.
     figures: DeviceArray<StateFigures>,
     /// Wall particles' mirror images by id, under mirrored walls.
@@ -110,6 +115,7 @@ impl<R: Real> DeviceState<R> {
             velocity_half: vec3_zeros(gpu, capacity, "half-step velocities")?,
             acceleration: vec3_zeros(gpu, capacity, "accelerations")?,
             density: DeviceArray::zeros(gpu, capacity, "densities")?,
+            density_rate: if fields.density_rate { Some(DeviceArray::zeros(gpu, capacity, "density rates")?) } else { None },
             id: DeviceArray::zeros(gpu, capacity, "ids")?,
             stress,
             viscosity: if fields.viscosity { Some(DeviceArray::zeros(gpu, capacity, "viscosities")?) } else { None },
@@ -136,6 +142,7 @@ impl<R: Real> DeviceState<R> {
             staged_position: vec3_zeros(gpu, staged, "inlet layers")?,
             staged_velocity: vec3_zeros(gpu, staged, "inlet layers")?,
             staged_id: DeviceArray::zeros(gpu, staged, "inlet layers")?,
+            staged_density: if fields.density_rate { Some(DeviceArray::zeros(gpu, staged, "inlet layers")?) } else { None },
             figures: DeviceArray::zeros(gpu, capacity.div_ceil(DIAGNOSTICS_RANGE), "diagnostics")?,
             wall_mirror: None,
         })
@@ -149,6 +156,7 @@ impl<R: Real> DeviceState<R> {
             + r3(&self.velocity_half)
             + r3(&self.acceleration)
             + self.density.bytes()
+            + self.density_rate.as_ref().map_or(0, DeviceArray::bytes)
             + self.id.bytes()
             + self.stress.as_ref().map_or(0, |s| s.iter().map(DeviceArray::bytes).sum())
             + self.viscosity.as_ref().map_or(0, DeviceArray::bytes)
@@ -167,6 +175,7 @@ impl<R: Real> DeviceState<R> {
             + v3(&self.staged_position)
             + r3(&self.staged_velocity)
             + self.staged_id.bytes()
+            + self.staged_density.as_ref().map_or(0, DeviceArray::bytes)
             + self.figures.bytes()
             + self.wall_mirror.as_ref().map_or(0, v3)
     }
@@ -219,6 +228,12 @@ impl<R: Real, T: Topology> Passes<R, T, Neighborhood<'static, T>> for GpuPasses<
     fn density<K: DensityKernel>(&mut self, args: DensityArgs<'_, R, Neighborhood<'static, T>>) {
         self.run(kernel::<R>("density", K::NAME, T::NAME), args);
     }
+    fn continuity<K: DensityKernel>(&mut self, args: ContinuityArgs<'_, R, Neighborhood<'static, T>>) {
+        self.run(kernel::<R>("continuity", K::NAME, T::NAME), args);
+    }
+    fn density_integration(&mut self, args: DensityIntegrationArgs<'_, R>) {
+        self.run(kernel::<R>("density_integration", "", ""), args);
+    }
     fn mirrored_wall(&mut self, args: MirroredWallArgs<'_, R, T>) {
         self.run(kernel::<R>("mirrored_wall", "", T::NAME), args);
     }
@@ -251,7 +266,8 @@ impl<R: Real, M: Model<R>> Simulation<R, M, CudaBackend<R>> {
         let Setup { run, host, wall_mirror } = setup;
         // Four layers of every inlet per step is far above what dt at the Eq. (10) bound brings.
         let staged = 4 * run.inlets().iter().map(|i| i.layer_size()).sum::<usize>();
-        let backend = CudaBackend::new(host, wall_mirror, staged, M::FIELDS, gpu)?;
+        let fields = host.particles.fields();
+        let backend = CudaBackend::new(host, wall_mirror, staged, fields, gpu)?;
         Ok(Self { run, backend })
     }
 
@@ -418,6 +434,15 @@ impl<R: Real> CudaBackend<R> {
                 &[&count, &order, &ByValue(d.id.view(capacity)), &ByValue(d.scratch_u32.view_mut(n))],
             )?;
             std::mem::swap(&mut d.id, &mut d.scratch_u32);
+            if d.density_rate.is_some() {
+                let sorted = ByValue(d.scratch_real.view_mut(n));
+                gpu.launch(
+                    kernel::<R>("gather", "", ""),
+                    threads,
+                    &[&count, &order, &ByValue(d.density.view(capacity)), &sorted],
+                )?;
+                std::mem::swap(&mut d.density, &mut d.scratch_real);
+            }
         }
         Ok(())
     }
@@ -480,6 +505,9 @@ impl<R: Real> Backend<R> for CudaBackend<R> {
             d.staged_velocity[a].upload(gpu, &s.velocity[a][..added])?;
         }
         d.staged_id.upload(gpu, &s.id[..added])?;
+        if let Some(staged) = &mut d.staged_density {
+            staged.upload(gpu, &s.density[..added])?;
+        }
         let capacity = d.id.len();
         // SAFETY: append_<T>(count, added, staged, field) over arrays of the run's capacity,
         // which the run's budget keeps the appended particles within.
@@ -498,6 +526,10 @@ impl<R: Real> Backend<R> for CudaBackend<R> {
             }
             let staged_id = ByValue(d.staged_id.view(added));
             gpu.launch("append_u32", added as u32, &[&count, &k, &staged_id, &ByValue(d.id.view_mut(capacity))])?;
+            if let Some(staged) = &d.staged_density {
+                let target = ByValue(d.density.view_mut(capacity));
+                gpu.launch(kernel::<R>("append", "", ""), added as u32, &[&count, &k, &ByValue(staged.view(added)), &target])?;
+            }
             gpu.launch("grow_count", 1, &[&ByValue(d.count.view_mut(1)), &k])?;
         }
         self.bound += added;
@@ -528,6 +560,7 @@ impl<R: Real> Backend<R> for CudaBackend<R> {
             velocity_half: vec3_view_mut(&d.velocity_half, n),
             acceleration: vec3_view_mut(&d.acceleration, n),
             density: d.density.view_mut(n),
+            density_rate: d.density_rate.as_ref().map(|r| r.view_mut(n)),
             stress: d.stress_view(n),
             viscosity: d.viscosity.as_ref().map(|v| v.view_mut(n)),
             velocity_gradient: d

@@ -41,12 +41,14 @@ pub const RESUMABLE: [&str; 3] = ["simulation.end_time_s", "simulation.time_step
 /// scene that agrees with the one it was taken from on each (array sections as a whole). A field
 /// added to the scene joins this list only if it changes the physics, and must then be left out
 /// of the serialized scene at its default, so that checkpoints taken before it existed resume.
-pub const PHYSICS: [&str; 25] = [
+pub const PHYSICS: [&str; 27] = [
     "material.rest_density_kg_m3",
     "material.sound_speed_m_s",
     "material.clamp_negative_pressure",
     "material.pressure_gradient",
     "material.density_kernel",
+    "material.density_equation",
+    "material.density_diffusion",
     "material.particle_spacing_m",
     "material.support_radius_factor",
     "material.gravity_m_s2",

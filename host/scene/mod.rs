@@ -93,6 +93,15 @@ pub struct Material {
     /// The kernel of the density sum, Eq. (5).
     #[serde(default)]
     pub density_kernel: DensityKernelKind,
+    /// How fluid particles get their density. Left out of the resolved scene at its default,
+    /// so that checkpoints taken before the field existed keep their fingerprint.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub density_equation: DensityEquation,
+    /// delta, the weight of the density diffusion term of the continuity equation (Molteni
+    /// and Colagrossi 2009's delta h c with h half the support radius); 0.1 is theirs and
+    /// DualSPHysics's default. Unused by the density sum.
+    #[serde(default = "default_density_diffusion", skip_serializing_if = "is_default_density_diffusion")]
+    pub density_diffusion: f64,
     /// Initial particle spacing (m).
     pub particle_spacing_m: f64,
     /// Support radius h as a multiple of the spacing (2 gives about 33 neighbors).
@@ -109,6 +118,12 @@ fn default_rest_density() -> f64 {
 }
 fn default_sound_speed() -> f64 {
     1.5f64.sqrt()
+}
+fn default_density_diffusion() -> f64 {
+    0.1
+}
+fn is_default_density_diffusion(delta: &f64) -> bool {
+    *delta == default_density_diffusion()
 }
 fn default_support_factor() -> f64 {
     2.0
@@ -153,6 +168,22 @@ pub enum DensityKernelKind {
     /// The spiky kernel, whose gradient Eq. (7) takes: the pressure force then follows the
     /// gradient of the density it comes from, and high-c lattices stay still.
     Spiky,
+}
+
+/// How fluid particles get their density.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum DensityEquation {
+    /// The paper's sum, Eq. (5), over the particles' positions. A free-surface particle's sum
+    /// lacks neighbors, so a thin thread reads well below rho0 at rest: Eq. (6) turns that into
+    /// a tension that tears it, and the clamped pressure carries no tension at all, so that a
+    /// falling thread stretches by losing density instead of thinning (docs/validation.md).
+    #[default]
+    Summation,
+    /// d rho / dt = -rho div v with Molteni and Colagrossi's density diffusion (delta-SPH):
+    /// every particle starts at rho0, a free surface has no deficit, and the fluid carries the
+    /// tension that stretching needs. Fixed boundary particles keep the sum.
+    Continuity,
 }
 
 /// Which discretisation of the viscous term.

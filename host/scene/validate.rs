@@ -168,6 +168,12 @@ impl Check<'_> {
             );
         }
         self.magnitude("material.gravity_m_s2", m.gravity_m_s2, MAX_GRAVITY_M_S2, "a gravity")?;
+        self.within(
+            "material.density_diffusion",
+            m.density_diffusion,
+            (0.0, 1.0),
+            "dimensionless; 0.1 is Molteni and Colagrossi's",
+        )?;
         let v = &m.viscosity;
         self.within("material.viscosity.nu0_m2_s", v.nu0_m2_s, VISCOSITY_M2_S, "m^2/s")?;
         self.within("material.viscosity.nu_inf_m2_s", v.nu_inf(), VISCOSITY_M2_S, "m^2/s")?;

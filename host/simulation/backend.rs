@@ -8,6 +8,7 @@ use super::Diagnostics;
 use crate::simulation::particles::{HostParticles, Particles};
 use coil_kernels::acceleration::AccelerationArgs;
 use coil_kernels::cell_grid::{Neighborhood, Neighbors};
+use coil_kernels::continuity_molteni2009::{ContinuityArgs, DensityIntegrationArgs};
 use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::density::{DensityArgs, DensityKernel};
 use coil_kernels::fluid::Fluid;
@@ -27,6 +28,8 @@ use std::fmt::Display;
 /// in topology `T`.
 pub trait Passes<R: Real, T: Topology, N: Neighbors> {
     fn density<K: DensityKernel>(&mut self, args: DensityArgs<'_, R, N>);
+    fn continuity<K: DensityKernel>(&mut self, args: ContinuityArgs<'_, R, N>);
+    fn density_integration(&mut self, args: DensityIntegrationArgs<'_, R>);
     fn mirrored_wall(&mut self, args: MirroredWallArgs<'_, R, T>);
     fn stress<Rh: Rheology<R>>(&mut self, args: StressArgs<'_, R, Rh, N>);
     fn shear_viscosity<Rh: Rheology<R>>(&mut self, args: ShearViscosityArgs<'_, R, Rh, N>);
@@ -56,6 +59,8 @@ pub struct ParticleViews<'a, R, T, N> {
     pub acceleration: Vec3ViewMut<'a, R>,
     /// Density (kg/m^3).
     pub density: ViewMut<'a, R>,
+    /// Present where density comes from the continuity equation.
+    pub density_rate: Option<ViewMut<'a, R>>,
     /// Present when the model uses stress (`Model::FIELDS`).
     pub stress: Option<SymTensorViewMut<'a, R>>,
     /// Present when the model uses a viscosity per particle.

@@ -33,6 +33,8 @@ pub struct Inlet {
     wobble: f64,
     /// Layers injected so far, which seeds each layer's wobble.
     layers: u64,
+    /// rho0 (kg/m^3), the density a new particle starts at.
+    rest_density: f64,
 }
 
 /// A point of the unit disc for layer `n`, from SplitMix64: the same sequence on every machine
@@ -125,6 +127,7 @@ impl Inlet {
             travelled: layer_distance,
             wobble: config.wobble_m,
             layers: 0,
+            rest_density,
         }
     }
 
@@ -257,6 +260,8 @@ impl Inlet {
             for o in &self.layer {
                 let x = [0, 1, 2].map(|k| centre[k] + o[k] + shift[k]);
                 p.push(*next_id, x, velocity);
+                let last = p.len() - 1;
+                p.density[last] = R::from_f64(self.rest_density);
                 *next_id += 1;
             }
             added += self.layer.len();

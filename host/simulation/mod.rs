@@ -11,15 +11,16 @@ pub mod time_step;
 use crate::cpu::neighbor_grid::NeighborGrid;
 use crate::cpu::CpuBackend;
 use crate::scene::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, InitialParticles};
-use crate::scene::{DensityKernelKind, Scene, ViscousVelocity, Walls};
+use crate::scene::{DensityEquation, DensityKernelKind, Scene, ViscousVelocity, Walls};
 use crate::simulation::inlet::Inlet;
-use crate::simulation::model::{Model, ParticleState};
+use crate::simulation::model::{Model, ModelFields, ParticleState};
 use crate::simulation::particles::{HostParticles, Particles};
 use crate::simulation::time_step::{Limit, StabilityBound, TimeStepper};
 use backend::{Backend, ParticleViews, Passes, Schedule};
 use coil_kernels::cell_grid::Neighbors;
+use coil_kernels::continuity_molteni2009::{ContinuityArgs, DensityIntegrationArgs};
 use coil_kernels::cross_viscosity::Rheology;
-use coil_kernels::density::{DensityArgs, Poly6, Spiky};
+use coil_kernels::density::{DensityArgs, DensityKernel, Poly6, Spiky};
 use coil_kernels::diagnostics::StateFigures;
 use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::LeapfrogArgs;
@@ -142,13 +143,19 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
         let inlets: Vec<Inlet> = scene.inlets.iter().map(|c| Inlet::new(c, s, h, mass, mat.rest_density_kg_m3)).collect();
         let fluid_capacity = scene.simulation.max_fluid_particles.unwrap_or(0).max(initial.fluid.len());
         let boundary_count = initial.boundary.len();
-        let mut particles = Particles::with_capacity(boundary_count + fluid_capacity, M::FIELDS);
+        let continuity = mat.density_equation == DensityEquation::Continuity;
+        let fields = ModelFields { density_rate: continuity, ..M::FIELDS };
+        let mut particles = Particles::with_capacity(boundary_count + fluid_capacity, fields);
         for (k, &x) in initial.boundary.iter().enumerate() {
             particles.push(k as u32, x, [0.0; 3]);
         }
         for (k, (&x, &v)) in initial.fluid.iter().zip(&initial.fluid_velocity).enumerate() {
             particles.push((boundary_count + k) as u32, x, v);
         }
+        // The continuity equation starts every fluid particle at rest density; the sum sets
+        // its own.
+        let n = particles.len();
+        particles.density[..n].fill(R::from_f64(mat.rest_density_kg_m3));
         let g = mat.gravity_m_s2;
         let fluid = Fluid {
             mass: R::from_f64(mass),
@@ -194,6 +201,7 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
             last_dt: 0.0,
             last_limit: Limit::Acoustic,
             density_kernel: mat.density_kernel,
+            density_diffusivity: R::from_f64(mat.density_diffusion * 0.5 * h * mat.sound_speed_m_s),
             viscous_velocity: ts.viscous_velocity,
         };
         let wall_mirror = (scene.simulation.walls == Walls::Mirrored)
@@ -327,7 +335,8 @@ fn in_topology<R: Real, B: Backend<R>, S: Schedule<R>>(backend: &mut B, schedule
     }
 }
 
-/// Algorithm 1, lines 5-8: density (pressure is evaluated from it where it is read).
+/// Algorithm 1, lines 5-8: density (pressure is evaluated from it where it is read), or, with
+/// the continuity equation, the fluid's density rate and the walls' density.
 struct DensityPass<'r, R: Real, M: Model<R>> {
     run: &'r RunState<R, M>,
 }
@@ -343,10 +352,28 @@ fn density<R: Real, M: Model<R>, T: Topology, N: Neighbors, P: Passes<R, T, N>>(
     v: &ParticleViews<'_, R, T, N>,
     passes: &mut P,
 ) {
-    let args = DensityArgs { neighborhood: v.neighbors, fluid: run.fluid, density: v.density };
     match run.density_kernel {
-        DensityKernelKind::Poly6 => passes.density::<Poly6>(args),
-        DensityKernelKind::Spiky => passes.density::<Spiky>(args),
+        DensityKernelKind::Poly6 => density_with::<R, M, Poly6, T, N, P>(run, v, passes),
+        DensityKernelKind::Spiky => density_with::<R, M, Spiky, T, N, P>(run, v, passes),
+    }
+}
+
+fn density_with<R: Real, M: Model<R>, K: DensityKernel, T: Topology, N: Neighbors, P: Passes<R, T, N>>(
+    run: &RunState<R, M>,
+    v: &ParticleViews<'_, R, T, N>,
+    passes: &mut P,
+) {
+    match v.density_rate {
+        Some(density_rate) => passes.continuity::<K>(ContinuityArgs {
+            neighborhood: v.neighbors,
+            fluid: run.fluid,
+            diffusivity: run.density_diffusivity,
+            id: v.id,
+            velocity: v.velocity.read(),
+            density: v.density,
+            density_rate,
+        }),
+        None => passes.density::<K>(DensityArgs { neighborhood: v.neighbors, fluid: run.fluid, density: v.density }),
     }
 }
 
@@ -404,6 +431,16 @@ impl<R: Real, M: Model<R>> Schedule<R> for ForcesAndMotion<'_, R, M> {
                 position: v.position.read(),
                 acceleration: v.acceleration,
                 velocity_half: v.velocity_half,
+            });
+        }
+        // The continuity equation's density after the accelerations have read this step's.
+        if let Some(density_rate) = v.density_rate {
+            passes.density_integration(DensityIntegrationArgs {
+                fluid,
+                dt: R::from_f64(self.dt),
+                id: v.id,
+                density_rate: density_rate.read(),
+                density: v.density,
             });
         }
         // Lines 17-19: leap-frog.

@@ -13,6 +13,9 @@ pub struct ModelFields {
     pub viscosity: bool,
     /// Velocity gradient, nine components (the paper's operator with hourglass control).
     pub velocity_gradient: bool,
+    /// d rho / dt, where density comes from the continuity equation; density then carries
+    /// state from step to step.
+    pub density_rate: bool,
 }
 
 /// Every per-particle array of a run. Arrays hold `capacity` entries; the first `len` are live.
@@ -41,6 +44,9 @@ pub struct Particles<R> {
     /// Velocity gradient grad v (1/s) by rows, `[a][b]` = d v_a / d x_b. Allocated only for the
     /// paper's operator with hourglass control.
     pub velocity_gradient: Option<[[Vec<R>; 3]; 3]>,
+    /// d rho / dt (kg/(m^3 s)). Allocated only where density comes from the continuity
+    /// equation.
+    pub density_rate: Option<Vec<R>>,
     /// Targets of the reorder, swapped with the field they receive.
     pub(crate) scratch_f64: Vec<f64>,
     pub(crate) scratch_real: Vec<R>,
@@ -67,6 +73,7 @@ impl<R: Real> Particles<R> {
             velocity_gradient: fields
                 .velocity_gradient
                 .then(|| core::array::from_fn(|_| core::array::from_fn(|_| zeros(capacity)))),
+            density_rate: fields.density_rate.then(|| zeros(capacity)),
             scratch_f64: zeros(capacity),
             scratch_real: zeros(capacity),
             scratch_u32: zeros(capacity),
@@ -90,8 +97,9 @@ impl<R: Real> Particles<R> {
         self.len = len;
     }
 
-    /// Appends a particle at rest density. The caller keeps within capacity (budgets are
-    /// checked before injection).
+    /// Appends a particle; its density is the density pass's to set, or, where density comes
+    /// from the continuity equation, the caller's. The caller keeps within capacity (budgets
+    /// are checked before injection).
     pub fn push(&mut self, id: u32, position: [f64; 3], velocity: [f64; 3]) {
         assert!(self.len < self.capacity, "particle capacity {} exceeded", self.capacity);
         let i = self.len;
@@ -105,13 +113,25 @@ impl<R: Real> Particles<R> {
         self.len += 1;
     }
 
-    /// Bytes allocated per particle of capacity.
-    pub fn bytes_per_particle(&self) -> usize {
-        Self::bytes_per_particle_with(ModelFields {
+    /// The optional arrays allocated.
+    pub fn fields(&self) -> ModelFields {
+        ModelFields {
             stress: self.stress.is_some(),
             viscosity: self.viscosity.is_some(),
             velocity_gradient: self.velocity_gradient.is_some(),
-        })
+            density_rate: self.density_rate.is_some(),
+        }
+    }
+
+    /// Whether density carries state from step to step (the continuity equation), so that the
+    /// sort reorders it.
+    pub fn density_is_state(&self) -> bool {
+        self.density_rate.is_some()
+    }
+
+    /// Bytes allocated per particle of capacity.
+    pub fn bytes_per_particle(&self) -> usize {
+        Self::bytes_per_particle_with(self.fields())
     }
 
     /// Bytes each particle takes in a run whose model allocates `fields`.
@@ -122,8 +142,9 @@ impl<R: Real> Particles<R> {
         let stress = if fields.stress { 6 * r } else { 0 };
         let viscosity = if fields.viscosity { r } else { 0 };
         let gradient = if fields.velocity_gradient { 9 * r } else { 0 };
+        let density_rate = if fields.density_rate { r } else { 0 };
         let scratch = 8 + r + 4;
-        position + velocities_and_acceleration + 4 + r + stress + viscosity + gradient + scratch
+        position + velocities_and_acceleration + 4 + r + stress + viscosity + gradient + density_rate + scratch
     }
 
     pub fn position_view(&self) -> Vec3View<'_, f64> {

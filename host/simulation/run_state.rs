@@ -39,6 +39,9 @@ pub struct RunState<R: Real, M: Model<R>> {
     pub last_limit: Limit,
     /// The kernel of Eq. (5): which monomorphised density pass each step launches.
     pub density_kernel: DensityKernelKind,
+    /// delta h c of the continuity equation's density diffusion (m^2/s), where density comes
+    /// from it (the particles then hold a density rate).
+    pub density_diffusivity: R,
     /// Which velocity the viscous terms read.
     pub viscous_velocity: ViscousVelocity,
 }

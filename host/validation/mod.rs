@@ -13,7 +13,7 @@ pub mod tradeoff;
 pub mod viscous_thread;
 
 use crate::output::plot::{Axis, Chart, Curve, Line, PALETTE};
-use crate::scene::{PressureGradient, ViscosityOperator};
+use crate::scene::{DensityEquation, PressureGradient, ViscosityOperator};
 use hydrostatic::Tank;
 use poiseuille::{cross_steady_velocity, relative_max_error, simulate, startup_velocity, Channel, CrossLaw};
 use std::path::Path;
@@ -487,19 +487,25 @@ pub fn jet_buckling(
     })
 }
 
-/// The viscous thread at `across` particles across D with operator `op`, negative pressure
-/// clamped or not, against the slender-thread solution: the largest relative error of the
+/// The viscous thread at `across` particles across D with operator `op`, density by
+/// `density_equation`, negative pressure clamped or not, against the slender-thread solution: the largest relative error of the
 /// downward speed over 12 slabs of the fall, averaged over the frames from 0.5 to 0.7 s.
 pub fn viscous_thread(
     across: f64,
     op: ViscosityOperator,
+    density_equation: DensityEquation,
     clamp_negative_pressure: bool,
     out: Option<&Path>,
 ) -> Result<CaseResult, String> {
-    let pressure = if clamp_negative_pressure { "clamped pressure" } else { "pressure as printed" };
+    let pressure = match (density_equation, clamp_negative_pressure) {
+        (DensityEquation::Summation, true) => "clamped pressure",
+        (DensityEquation::Summation, false) => "pressure as printed",
+        (DensityEquation::Continuity, true) => "continuity density, clamped pressure",
+        (DensityEquation::Continuity, false) => "continuity density",
+    };
     let case = format!("viscous thread, {} across D, {}, {pressure}", across, operator_name(op));
     let started = Instant::now();
-    let (scene, thread) = viscous_thread::thread_scene(across, op, clamp_negative_pressure, 0.7)?;
+    let (scene, thread) = viscous_thread::thread_scene(across, op, density_equation, clamp_negative_pressure, 0.7)?;
     let reference = thread.profile()?;
     let slabs = viscous_thread::measure(&scene, 12, 0.0125, 0.5).map_err(|e| format!("{case}: {e}"))?;
     let error = slabs
@@ -543,7 +549,12 @@ pub fn viscous_thread(
                     },
                 ],
             };
-            let word = if clamp_negative_pressure { "clamped" } else { "printed" };
+            let word = match (density_equation, clamp_negative_pressure) {
+                (DensityEquation::Summation, true) => "clamped",
+                (DensityEquation::Summation, false) => "printed",
+                (DensityEquation::Continuity, true) => "continuity_clamped",
+                (DensityEquation::Continuity, false) => "continuity",
+            };
             save_plot(&chart, &dir.join(format!("thread_{}_{word}_{across}.png", scene_word(op))))
         })
         .transpose()?;

@@ -5,7 +5,7 @@
 //! 3 nu.
 
 use super::snapshot::snapshots;
-use crate::scene::{Scene, ViscosityOperator};
+use crate::scene::{DensityEquation, Scene, ViscosityOperator};
 
 /// The shipped Newtonian jet.
 const NEWTONIAN_JET: &str = include_str!("../../scenes/newtonian_jet.toml");
@@ -119,11 +119,12 @@ pub fn speed_at(profile: &[[f64; 2]], z: f64) -> f64 {
 }
 
 /// The shipped Newtonian jet falling `FALL_M` onto nothing: no plate, the domain's floor at
-/// y = 0, `across` particles across D, operator `op`, negative pressure clamped or not, run to
-/// `end_time_s`; with the thread it should follow.
+/// y = 0, `across` particles across D, operator `op`, density by `density_equation`, negative
+/// pressure clamped or not, run to `end_time_s`; with the thread it should follow.
 pub fn thread_scene(
     across: f64,
     op: ViscosityOperator,
+    density_equation: DensityEquation,
     clamp_negative_pressure: bool,
     end_time_s: f64,
 ) -> Result<(Scene, SlenderThread), String> {
@@ -135,6 +136,7 @@ pub fn thread_scene(
     let material = &mut scene.material;
     material.particle_spacing_m = diameter / across;
     material.clamp_negative_pressure = clamp_negative_pressure;
+    material.density_equation = density_equation;
     material.viscosity.operator = op;
     scene.boundaries.clear();
     let inlet = &mut scene.inlets[0];

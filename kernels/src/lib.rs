@@ -6,7 +6,8 @@
 //!
 //! Per step: [`cell_grid::hash_pass`], the [`counting_sort`] stages and a gather of every
 //! particle field, the [`fluid_cells`] marks, on the CPU the [`neighbor_list`] pass,
-//! [`density::density_pass`] (Eq. 5, 6),
+//! [`density::density_pass`] (Eq. 5, 6) or, with the continuity equation,
+//! [`continuity_molteni2009::continuity_pass`],
 //! [`mirrored_wall::mirrored_wall_pass`] (when the scene asks), the viscous operator's pre-pass
 //! ([`viscosity::stress_andrade2014::stress_pass`], Eq. 8, 2, 3, for the paper's operator;
 //! [`viscosity::laplacian_morris1997::shear_viscosity_pass`] for Morris's operator with the
@@ -14,7 +15,8 @@
 //! paper's operator with hourglass control),
 //! [`acceleration::acceleration_pass`] (Eq. 7, 9, Müller's or Morris's Laplacian, hourglass
 //! control, gravity),
-//! [`nozzle::nozzle_pass`] (jet scenes only) and
+//! [`nozzle::nozzle_pass`] (jet scenes only),
+//! [`continuity_molteni2009::density_integration_pass`] (with the continuity equation) and
 //! [`leapfrog::leapfrog_pass`]; then [`diagnostics`] guards the run.
 #![no_std]
 #![allow(clippy::neg_cmp_op_on_partial_ord, reason = "`!(a < b)` is how a check here also refuses NaN")]
@@ -28,6 +30,7 @@ extern crate std;
 
 pub mod acceleration;
 pub mod cell_grid;
+pub mod continuity_molteni2009;
 pub mod counting_sort;
 pub mod cross_viscosity;
 pub mod density;

@@ -13,6 +13,7 @@
 
 use crate::acceleration::{acceleration_pass, AccelerationArgs};
 use crate::cell_grid::{hash_pass, HashArgs, Neighborhood};
+use crate::continuity_molteni2009::{continuity_pass, density_integration_pass, ContinuityArgs, DensityIntegrationArgs};
 use crate::counting_sort::{
     chunk_total, count_particle, gather, scan_chunk, scan_chunk_in_place, scan_chunk_offsets, scatter, sort_bucket, sum_chunk,
     Counters,
@@ -163,6 +164,20 @@ per_neighborhood_kernels!(density_f32, density_periodic_f32, DensityArgs<f32>, d
 per_neighborhood_kernels!(density_f64, density_periodic_f64, DensityArgs<f64>, density_pass<f64, Poly6>);
 per_neighborhood_kernels!(density_spiky_f32, density_spiky_periodic_f32, DensityArgs<f32>, density_pass<f32, Spiky>);
 per_neighborhood_kernels!(density_spiky_f64, density_spiky_periodic_f64, DensityArgs<f64>, density_pass<f64, Spiky>);
+per_neighborhood_kernels!(continuity_f32, continuity_periodic_f32, ContinuityArgs<f32>, continuity_pass<f32, Poly6>);
+per_neighborhood_kernels!(continuity_f64, continuity_periodic_f64, ContinuityArgs<f64>, continuity_pass<f64, Poly6>);
+per_neighborhood_kernels!(
+    continuity_spiky_f32,
+    continuity_spiky_periodic_f32,
+    ContinuityArgs<f32>,
+    continuity_pass<f32, Spiky>
+);
+per_neighborhood_kernels!(
+    continuity_spiky_f64,
+    continuity_spiky_periodic_f64,
+    ContinuityArgs<f64>,
+    continuity_pass<f64, Spiky>
+);
 per_topology_kernels!(mirrored_wall_f32, mirrored_wall_periodic_f32, MirroredWallArgs<f32>, mirrored_wall_pass<f32>);
 per_topology_kernels!(mirrored_wall_f64, mirrored_wall_periodic_f64, MirroredWallArgs<f64>, mirrored_wall_pass<f64>);
 per_neighborhood_kernels!(
@@ -277,6 +292,8 @@ per_neighborhood_kernels!(
 );
 per_index_kernel!(nozzle_f32, NozzleArgs<'static, f32>, nozzle_pass::<f32>);
 per_index_kernel!(nozzle_f64, NozzleArgs<'static, f64>, nozzle_pass::<f64>);
+per_index_kernel!(density_integration_f32, DensityIntegrationArgs<'static, f32>, density_integration_pass::<f32>);
+per_index_kernel!(density_integration_f64, DensityIntegrationArgs<'static, f64>, density_integration_pass::<f64>);
 per_topology_kernels!(leapfrog_f32, leapfrog_periodic_f32, LeapfrogArgs<f32>, leapfrog_pass<f32>);
 per_topology_kernels!(leapfrog_f64, leapfrog_periodic_f64, LeapfrogArgs<f64>, leapfrog_pass<f64>);
 
@@ -432,6 +449,14 @@ pub const ENTRIES: &[(&str, Emulated)] = {
         density_spiky_periodic_f32,
         density_spiky_f64,
         density_spiky_periodic_f64,
+        continuity_f32,
+        continuity_periodic_f32,
+        continuity_f64,
+        continuity_periodic_f64,
+        continuity_spiky_f32,
+        continuity_spiky_periodic_f32,
+        continuity_spiky_f64,
+        continuity_spiky_periodic_f64,
         mirrored_wall_f32,
         mirrored_wall_periodic_f32,
         mirrored_wall_f64,
@@ -478,6 +503,8 @@ pub const ENTRIES: &[(&str, Emulated)] = {
         acceleration_hourglass_periodic_f64,
         nozzle_f32,
         nozzle_f64,
+        density_integration_f32,
+        density_integration_f64,
         leapfrog_f32,
         leapfrog_periodic_f32,
         leapfrog_f64,
