@@ -176,8 +176,8 @@ pub enum DensityKernelKind {
 pub enum DensityEquation {
     /// The paper's sum, Eq. (5), over the particles' positions. A free-surface particle's sum
     /// lacks neighbors, so a thin thread reads well below rho0 at rest: Eq. (6) turns that into
-    /// a tension that tears it, and the clamped pressure carries no tension at all, so that a
-    /// falling thread stretches by losing density instead of thinning (docs/validation.md).
+    /// a tension that tears it, and the clamped pressure carries no tension at all
+    /// (docs/validation.md).
     #[default]
     Summation,
     /// d rho / dt = -rho div v with Molteni and Colagrossi's density diffusion (delta-SPH):
