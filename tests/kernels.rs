@@ -632,6 +632,24 @@ fn sorted_lattice(
     (p, grid, fluid)
 }
 
+/// A 12^3 [`sorted_lattice`] at rest density whose velocity is `velocity_at`, and the index of
+/// its particle nearest the centre.
+fn rest_lattice_12(
+    fields: coil::simulation::particles::ModelFields,
+    velocity_at: impl Fn([f64; 3]) -> [f64; 3],
+) -> (coil::simulation::particles::Particles<f64>, coil::cpu::neighbor_grid::NeighborGrid, Fluid<f64>, usize) {
+    let (mut p, grid, fluid) = sorted_lattice(12, fields, |_| true, velocity_at);
+    let n = p.len();
+    p.density[..n].fill(LATTICE_REST_DENSITY);
+    let centre = (0..n)
+        .min_by(|&a, &b| {
+            let d = |i: usize| (0..3).map(|c| (p.position[c][i] - 0.06).powi(2)).sum::<f64>();
+            d(a).total_cmp(&d(b))
+        })
+        .expect("particles");
+    (p, grid, fluid, centre)
+}
+
 /// The viscous acceleration (m/s^2) of the particle nearest the centre of a 12^3
 /// [`sorted_lattice`] at rest density whose velocity is `velocity_at`, by the paper's operator
 /// with hourglass control of weight `coefficient`, and by Morris's operator; nu = 0.1 m^2/s.
@@ -645,15 +663,8 @@ fn lattice_viscous_accelerations(velocity_at: impl Fn([f64; 3]) -> [f64; 3], coe
     use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
     let nu0 = 0.1;
     let fields = ModelFields { viscosity: true, velocity_gradient: true, ..ModelFields::default() };
-    let (mut p, grid, fluid) = sorted_lattice(12, fields, |_| true, velocity_at);
+    let (mut p, grid, fluid, centre) = rest_lattice_12(fields, velocity_at);
     let n = p.len();
-    p.density[..n].fill(LATTICE_REST_DENSITY);
-    let centre = (0..n)
-        .min_by(|&a, &b| {
-            let d = |i: usize| (0..3).map(|c| (p.position[c][i] - 0.06).powi(2)).sum::<f64>();
-            d(a).total_cmp(&d(b))
-        })
-        .expect("particles");
     let nb = grid.neighborhood(vec3_view(&p.position, n), Open);
     let velocity = vec3_view(&p.velocity, n);
     let density = View::new(&p.density[..n]);
@@ -1012,15 +1023,8 @@ fn lattice_density_rate(velocity_at: impl Fn([f64; 3]) -> [f64; 3]) -> f64 {
     use coil_kernels::continuity_molteni2009::{density_rate, ContinuityArgs};
     use coil_kernels::view::ViewMut;
     let fields = ModelFields { density_rate: true, ..ModelFields::default() };
-    let (mut p, grid, fluid) = sorted_lattice(12, fields, |_| true, velocity_at);
+    let (mut p, grid, fluid, centre) = rest_lattice_12(fields, velocity_at);
     let n = p.len();
-    p.density[..n].fill(LATTICE_REST_DENSITY);
-    let centre = (0..n)
-        .min_by(|&a, &b| {
-            let d = |i: usize| (0..3).map(|c| (p.position[c][i] - 0.06).powi(2)).sum::<f64>();
-            d(a).total_cmp(&d(b))
-        })
-        .expect("particles");
     let args = ContinuityArgs {
         neighborhood: grid.neighborhood(vec3_view(&p.position, n), Open),
         fluid,

@@ -635,8 +635,7 @@ impl Scene {
             field: "(syntax)".into(),
             reason: e.message().to_string(),
         })?;
-        scene.check_array_lengths(&given, file)?;
-        scene.validate(file)?;
+        scene.validate(&given, file)?;
         Ok(scene)
     }
 

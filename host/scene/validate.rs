@@ -34,21 +34,6 @@ pub const MAX_FRAMES: f64 = 1e5;
 const MAX_NAME_CHARS: usize = 100;
 
 impl Scene {
-    /// Refuses an array of `given` (the scene as its text reads) longer or shorter than the
-    /// field it fills: serde fills a fixed-size array from the first elements and drops the rest.
-    pub(super) fn check_array_lengths(&self, given: &toml::Table, file: &str) -> Result<(), SceneError> {
-        let check = Check { file };
-        let written = Value::try_from(self).map_err(|e| SceneError {
-            file: file.into(),
-            field: "(scene)".into(),
-            reason: format!("cannot be written out: {e}"),
-        })?;
-        match first_length_mismatch(&Value::Table(given.clone()), &written, String::new()) {
-            Some((field, got, expected)) => check.fail(&field, format!("must have {expected} elements, got {got}")),
-            None => Ok(()),
-        }
-    }
-
     /// Refuses a support radius whose kernel coefficients `precision` cannot hold: checked at
     /// load for the scene's precision, and again where a run or check overrides it.
     pub fn check_precision(&self, precision: Precision, file: &str) -> Result<(), SceneError> {
@@ -71,10 +56,17 @@ impl Scene {
         )
     }
 
-    pub(super) fn validate(&self, file: &str) -> Result<(), SceneError> {
+    /// `given`: the scene as its text reads, before serde filled the fields.
+    pub(super) fn validate(&self, given: &toml::Table, file: &str) -> Result<(), SceneError> {
         let check = Check { file };
+        let written = Value::try_from(self).map_err(|e| SceneError {
+            file: file.into(),
+            field: "(scene)".into(),
+            reason: format!("cannot be written out: {e}"),
+        })?;
+        check.array_lengths(given, &written)?;
         check.name(&self.name)?;
-        check.finite(self)?;
+        check.finite(&written)?;
         check.material(&self.material)?;
         self.check_precision(self.simulation.precision, file)?;
         check.domain(&self.domain, &self.material, self.support_radius())?;
@@ -141,14 +133,19 @@ impl Check<'_> {
         Ok(())
     }
 
-    /// Every number of the scene is finite.
-    fn finite(&self, scene: &Scene) -> Checked {
-        let value = Value::try_from(scene).map_err(|e| SceneError {
-            file: self.file.into(),
-            field: "(scene)".into(),
-            reason: format!("cannot be written out: {e}"),
-        })?;
-        match first_non_finite(&value, String::new()) {
+    /// Refuses an array of `given` longer or shorter than the field of `written` (the scene as
+    /// serde writes it back) that it fills: serde fills a fixed-size array from the first
+    /// elements and drops the rest.
+    fn array_lengths(&self, given: &toml::Table, written: &Value) -> Checked {
+        match first_length_mismatch(&Value::Table(given.clone()), written, String::new()) {
+            Some((field, got, expected)) => self.fail(&field, format!("must have {expected} elements, got {got}")),
+            None => Ok(()),
+        }
+    }
+
+    /// Every number of `scene` (as serde writes it back) is finite.
+    fn finite(&self, scene: &Value) -> Checked {
+        match first_non_finite(scene, String::new()) {
             Some((field, v)) => self.fail(&field, format!("must be a finite number, got {v}")),
             None => Ok(()),
         }
