@@ -224,10 +224,10 @@ mod tests {
         // Fig. 5's two paper jets bind; Fig. 6's six comparisons do not; quick runs no jet.
         assert_eq!(binding(Group::Jet, false), [true, true, false, false, false, false, false, false]);
         assert!(binding(Group::Jet, true).is_empty());
-        // The thread, each operator and pressure treatment at 5 across (and 8, 12 in full), is
-        // shown for comparison until an operator stretches it as the liquid does.
+        // The thread, each operator, density and pressure treatment at 5 across (and 8, 12 in
+        // full), is shown for comparison until an operator stretches it as the liquid does.
         assert_eq!(binding(Group::Thread, true), [false; 9]);
         assert_eq!(binding(Group::Thread, false), [false; 27]);
-        assert_eq!(cases(true, out).len(), 8 + 9 + 1 + 4 + 1 + 4 + 6);
+        assert_eq!(cases(true, out).len(), 8 + 9 + 1 + 4 + 1 + 4 + 9);
     }
 }
