@@ -786,7 +786,7 @@ impl Ball {
         use coil::simulation::particles::{vec3_view, ModelFields};
         use coil_kernels::density::{density_pass, DensityArgs, Poly6};
         use coil_kernels::view::ViewMut;
-        let fields = ModelFields { stress: true, viscosity: true, velocity_gradient: true, density_rate: false };
+        let fields = ModelFields { stress: true, viscosity: true, velocity_gradient: true, density_rate: false, shift: false };
         let in_ball = |x: [f64; 3]| x.map(|c| c - BALL_CENTRE).iter().map(|c| c * c).sum::<f64>().sqrt() <= 3.5 * LATTICE_SPACING;
         let (mut particles, grid, fluid) = sorted_lattice(20, fields, in_ball, |_| [0.0; 3]);
         let fluid = Fluid { sound_speed2: 0.0, ..fluid };
@@ -1123,5 +1123,83 @@ fn a_stretched_cylinder_carries_the_tension_of_its_operator() {
     assert!(thin[0] > 0.7 && thin[0] < thick[0] && thick[0] > 0.9 && thick[0] <= 1.0, "paper's: {} then {}", thin[0], thick[0]);
     for k in 1..3 {
         assert!(thin[k] > 0.35 && thick[k] > 0.45 && thick[k] <= 0.5, "Laplacian {k}: {} then {}", thin[k], thick[k]);
+    }
+}
+
+/// The shift (m) of particle `i` of `p` by particle shifting with A = 2 over `dt` (s), the
+/// free-surface projection at the run's threshold or (`projection` false) off.
+fn lattice_shift(
+    p: &coil::simulation::particles::Particles<f64>,
+    grid: &coil::cpu::neighbor_grid::NeighborGrid,
+    fluid: Fluid<f64>,
+    i: usize,
+    dt: f64,
+    projection: bool,
+) -> Vec3<f64> {
+    use coil::simulation::particles::vec3_view;
+    use coil_kernels::shifting_sun2017::{particle_shift, Shifting, ShiftingArgs};
+    use coil_kernels::view::Vec3ViewMut;
+    let n = p.len();
+    let mut scratch = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+    let [x, y, z] = &mut scratch;
+    let args = ShiftingArgs {
+        neighborhood: grid.neighborhood(vec3_view(&p.position, n), Open),
+        fluid,
+        shifting: Shifting {
+            coefficient: 2.0 * fluid.kernels.h,
+            inverse_spacing_weight: 1.0 / fluid.kernels.spiky(LATTICE_SPACING * LATTICE_SPACING),
+            surface_divergence: if projection { 2.75 } else { 0.0 },
+        },
+        dt,
+        id: View::new(&p.id[..n]),
+        velocity: vec3_view(&p.velocity, n),
+        shift: Vec3ViewMut::new(x, y, z),
+    };
+    particle_shift(i, &args)
+}
+
+/// Particle shifting leaves a lattice alone, pushes a particle moved towards a neighbor back
+/// towards its site, by A h |v| dt times about 28 offset / h^2, never overshooting it however
+/// long the step, and at a free surface does not push particles out of the fluid (as the
+/// concentration gradient alone would) but still restores them along it: by 0.63 of the
+/// interior's shift, and slightly inwards, because the offset tilts the surface normal that the
+/// projection takes from the concentration gradient. The fluid moves 10 um a step, 1/2000 of h.
+#[test]
+fn particle_shifting_restores_a_lattice_and_keeps_a_free_surface() {
+    use coil::simulation::particles::ModelFields;
+    let fields = ModelFields { shift: true, ..ModelFields::default() };
+    let nearest = |p: &coil::simulation::particles::Particles<f64>, site: [f64; 3]| {
+        (0..p.len())
+            .min_by(|&a, &b| {
+                let d = |i: usize| (0..3).map(|c| (p.position[c][i] - site[c]).powi(2)).sum::<f64>();
+                d(a).total_cmp(&d(b))
+            })
+            .expect("particles")
+    };
+    let s = LATTICE_SPACING;
+    // The half space below y = 6 spacings, moving at 1 m/s along x.
+    let (mut p, grid, fluid) = sorted_lattice(12, fields, |x| x[1] < 6.0 * s, |_| [1.0, 0.0, 0.0]);
+    let interior = nearest(&p, [5.5 * s, 2.5 * s, 5.5 * s]);
+    let surface = nearest(&p, [5.5 * s, 5.5 * s, 5.5 * s]);
+    let dt = 1e-5;
+    let at_rest = lattice_shift(&p, &grid, fluid, interior, dt, true);
+    assert!(at_rest.norm() < 1e-15, "a lattice particle shifts by {at_rest:?} m");
+    let outward = lattice_shift(&p, &grid, fluid, surface, dt, false);
+    assert!(outward.y > 1e-6, "without the projection a surface particle moves out by {} m", outward.y);
+    let along = lattice_shift(&p, &grid, fluid, surface, dt, true);
+    assert!(along.norm() < 1e-15, "a surface lattice particle shifts by {along:?} m");
+    // Each particle moved 0.3 spacings along x (within its grid cell), towards its neighbor.
+    let offset = 0.3 * s;
+    let diffusion = 2.0 * fluid.kernels.h * 1.0 * dt;
+    for (i, restored) in [(interior, 1.0), (surface, 0.63)] {
+        p.position[0][i] += offset;
+        let shift = lattice_shift(&p, &grid, fluid, i, dt, true);
+        let expected = -28.0 * restored * diffusion * offset / fluid.kernels.h2;
+        println!("shift {shift:?} m, expected about {expected:.3e} m along x");
+        assert!((shift.x / expected - 1.0).abs() < 0.1, "a particle 0.3 spacings off its site shifts by {} m along x", shift.x);
+        assert!(shift.y < 1e-3 * shift.x.abs(), "and by {} m out of the fluid", shift.y);
+        let capped = lattice_shift(&p, &grid, fluid, i, 1.0, true);
+        assert!(capped.x < 0.0 && capped.x > -offset, "a long step shifts it by {} m: overshoot", capped.x);
+        p.position[0][i] -= offset;
     }
 }

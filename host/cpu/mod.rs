@@ -20,7 +20,8 @@ use coil_kernels::diagnostics::{range_figures, DiagnosticsArgs};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::{leapfrog_pass, LeapfrogArgs};
 use coil_kernels::mirrored_wall::{mirrored_wall_pass, MirroredWallArgs};
-use coil_kernels::nozzle::{nozzle_pass, NozzleArgs};
+use coil_kernels::nozzle::{nozzle_pass, nozzle_shift_pass, NozzleArgs, NozzleShiftArgs};
+use coil_kernels::shifting_sun2017::{shift_pass, shifting_pass, ShiftArgs, ShiftingArgs};
 use coil_kernels::topology::{Open, Periodic, Topology};
 use coil_kernels::view::{Vec3View, View};
 use coil_kernels::viscosity::hourglass_ganzenmuller2015::{velocity_gradient_pass, VelocityGradientArgs};
@@ -80,6 +81,7 @@ impl<R: Real> CpuBackend<R> {
             acceleration: vec3_view_mut(&mut p.acceleration, n),
             density: view_mut(&mut p.density, n),
             density_rate: p.density_rate.as_mut().map(|r| view_mut(r, n)),
+            shift: p.shift.as_mut().map(|s| vec3_view_mut(s, n)),
             stress: p.stress.as_mut().map(|s| stress_view_mut(s, n)),
             viscosity: p.viscosity.as_mut().map(|v| view_mut(v, n)),
             velocity_gradient: p.velocity_gradient.as_mut().map(|g| mat3_view_mut(g, n)),
@@ -209,5 +211,14 @@ impl<R: Real, T: Topology, N: Neighbors + Sync> Passes<R, T, N> for CpuPasses {
     }
     fn leapfrog(&mut self, args: LeapfrogArgs<'_, R, T>) {
         launch(self.n, |i| leapfrog_pass(i, &args));
+    }
+    fn shifting(&mut self, args: ShiftingArgs<'_, R, N>) {
+        launch(self.n, |i| shifting_pass(i, &args));
+    }
+    fn nozzle_shift(&mut self, args: NozzleShiftArgs<'_, R>) {
+        launch(self.n, |i| nozzle_shift_pass(i, &args));
+    }
+    fn shift(&mut self, args: ShiftArgs<'_, R, T>) {
+        launch(self.n, |i| shift_pass(i, &args));
     }
 }

@@ -25,7 +25,8 @@ use coil_kernels::fluid::Fluid;
 use coil_kernels::fluid_cells::{HoldsFluidArgs, NearFluidArgs};
 use coil_kernels::leapfrog::LeapfrogArgs;
 use coil_kernels::mirrored_wall::MirroredWallArgs;
-use coil_kernels::nozzle::NozzleArgs;
+use coil_kernels::nozzle::{NozzleArgs, NozzleShiftArgs};
+use coil_kernels::shifting_sun2017::{ShiftArgs, ShiftingArgs};
 use coil_kernels::topology::{Periodic, Topology};
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, View};
 use coil_kernels::viscosity::hourglass_ganzenmuller2015::VelocityGradientArgs;
@@ -58,6 +59,8 @@ struct DeviceState<R> {
     density: DeviceArray<R>,
     /// Where density comes from the continuity equation.
     density_rate: Option<DeviceArray<R>>,
+    /// Where the scene shifts particles.
+    shift: Option<DeviceVec3<R>>,
     id: DeviceArray<u32>,
     stress: Option<[DeviceArray<R>; 6]>,
     viscosity: Option<DeviceArray<R>>,
@@ -116,6 +119,7 @@ impl<R: Real> DeviceState<R> {
             acceleration: vec3_zeros(gpu, capacity, "accelerations")?,
             density: DeviceArray::zeros(gpu, capacity, "densities")?,
             density_rate: if fields.density_rate { Some(DeviceArray::zeros(gpu, capacity, "density rates")?) } else { None },
+            shift: if fields.shift { Some(vec3_zeros(gpu, capacity, "shifts")?) } else { None },
             id: DeviceArray::zeros(gpu, capacity, "ids")?,
             stress,
             viscosity: if fields.viscosity { Some(DeviceArray::zeros(gpu, capacity, "viscosities")?) } else { None },
@@ -157,6 +161,7 @@ impl<R: Real> DeviceState<R> {
             + r3(&self.acceleration)
             + self.density.bytes()
             + self.density_rate.as_ref().map_or(0, DeviceArray::bytes)
+            + self.shift.as_ref().map_or(0, r3)
             + self.id.bytes()
             + self.stress.as_ref().map_or(0, |s| s.iter().map(DeviceArray::bytes).sum())
             + self.viscosity.as_ref().map_or(0, DeviceArray::bytes)
@@ -254,6 +259,15 @@ impl<R: Real, T: Topology> Passes<R, T, Neighborhood<'static, T>> for GpuPasses<
     }
     fn leapfrog(&mut self, args: LeapfrogArgs<'_, R, T>) {
         self.run(kernel::<R>("leapfrog", "", T::NAME), args);
+    }
+    fn shifting(&mut self, args: ShiftingArgs<'_, R, Neighborhood<'static, T>>) {
+        self.run(kernel::<R>("shifting", "", T::NAME), args);
+    }
+    fn nozzle_shift(&mut self, args: NozzleShiftArgs<'_, R>) {
+        self.run(kernel::<R>("nozzle_shift", "", ""), args);
+    }
+    fn shift(&mut self, args: ShiftArgs<'_, R, T>) {
+        self.run(kernel::<R>("shift", "", T::NAME), args);
     }
 }
 
@@ -561,6 +575,7 @@ impl<R: Real> Backend<R> for CudaBackend<R> {
             acceleration: vec3_view_mut(&d.acceleration, n),
             density: d.density.view_mut(n),
             density_rate: d.density_rate.as_ref().map(|r| r.view_mut(n)),
+            shift: d.shift.as_ref().map(|s| vec3_view_mut(s, n)),
             stress: d.stress_view(n),
             viscosity: d.viscosity.as_ref().map(|v| v.view_mut(n)),
             velocity_gradient: d

@@ -205,6 +205,10 @@ pub enum ViscosityOperator {
 /// bound does not count.
 pub const MAX_HOURGLASS_CONTROL: f64 = 2.0;
 
+/// Largest `particle_shifting` coefficient a scene may ask for: five times the usual 2. Above
+/// it a particle's shift in one step would approach its own displacement.
+pub const MAX_PARTICLE_SHIFTING: f64 = 10.0;
+
 /// Kinematic viscosities (m^2/s) and the Cross model, Eq. (3).
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -290,6 +294,13 @@ pub struct SimulationSettings {
     /// What wall particles show the fluid.
     #[serde(default)]
     pub walls: Walls,
+    /// A, the coefficient of particle shifting (dimensionless): each step a fluid particle
+    /// moving at |v| moves A h |v| dt down the gradient of its neighbors' concentration, along
+    /// the surface near a free surface (Lind et al. 2012, Sun et al. 2017). 0, the paper's, turns
+    /// it off; 2 is Skillen et al.'s and DualSPHysics's. Left out of the resolved scene at 0,
+    /// so that checkpoints taken before the field existed keep their fingerprint.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub particle_shifting: f64,
 }
 
 /// The velocity and pressure that wall particles carry into the fluid's sums.

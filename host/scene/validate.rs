@@ -2,7 +2,7 @@
 //! refusing a value with the field named as `--set` spells it.
 
 use super::{short, Boundary, Domain, Material, Nozzle, NozzleMotion, Output, Scene, SceneError, ViscosityOperator};
-use super::{Precision, SimulationSettings, MAX_HOURGLASS_CONTROL};
+use super::{Precision, SimulationSettings, MAX_HOURGLASS_CONTROL, MAX_PARTICLE_SHIFTING};
 use crate::simulation::time_step::{Limit, StabilityBound};
 use toml::Value;
 
@@ -249,6 +249,12 @@ impl Check<'_> {
     /// `h`: the support radius (m).
     fn simulation(&self, s: &SimulationSettings, m: &Material, h: f64) -> Checked {
         self.positive("simulation.end_time_s", s.end_time_s)?;
+        self.within(
+            "simulation.particle_shifting",
+            s.particle_shifting,
+            (0.0, MAX_PARTICLE_SHIFTING),
+            "dimensionless; 0 turns it off, 2 is Skillen et al.'s",
+        )?;
         let ts = &s.time_step;
         self.positive("simulation.time_step.safety_factor", ts.safety_factor)?;
         if ts.safety_factor > 1.0 && !ts.allow_above_stability_bound {

@@ -14,7 +14,8 @@ use coil_kernels::density::{DensityArgs, DensityKernel};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::LeapfrogArgs;
 use coil_kernels::mirrored_wall::MirroredWallArgs;
-use coil_kernels::nozzle::NozzleArgs;
+use coil_kernels::nozzle::{NozzleArgs, NozzleShiftArgs};
+use coil_kernels::shifting_sun2017::{ShiftArgs, ShiftingArgs};
 use coil_kernels::topology::{Periodic, Topology};
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::viscosity::hourglass_ganzenmuller2015::VelocityGradientArgs;
@@ -37,6 +38,9 @@ pub trait Passes<R: Real, T: Topology, N: Neighbors> {
     fn acceleration<Op: ViscousOperator<R>>(&mut self, args: AccelerationArgs<'_, R, Op, N>);
     fn nozzle(&mut self, args: NozzleArgs<'_, R>);
     fn leapfrog(&mut self, args: LeapfrogArgs<'_, R, T>);
+    fn shifting(&mut self, args: ShiftingArgs<'_, R, N>);
+    fn nozzle_shift(&mut self, args: NozzleShiftArgs<'_, R>);
+    fn shift(&mut self, args: ShiftArgs<'_, R, T>);
 }
 
 /// A backend's particle buffers as views over its own memory, live particles only, in the
@@ -61,6 +65,8 @@ pub struct ParticleViews<'a, R, T, N> {
     pub density: ViewMut<'a, R>,
     /// Present where density comes from the continuity equation.
     pub density_rate: Option<ViewMut<'a, R>>,
+    /// Present where the scene shifts particles.
+    pub shift: Option<Vec3ViewMut<'a, R>>,
     /// Present when the model uses stress (`Model::FIELDS`).
     pub stress: Option<SymTensorViewMut<'a, R>>,
     /// Present when the model uses a viscosity per particle.

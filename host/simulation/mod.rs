@@ -25,11 +25,17 @@ use coil_kernels::diagnostics::StateFigures;
 use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::LeapfrogArgs;
 use coil_kernels::mirrored_wall::MirroredWallArgs;
-use coil_kernels::nozzle::NozzleArgs;
+use coil_kernels::nozzle::{NozzleArgs, NozzleShiftArgs};
+use coil_kernels::shifting_sun2017::{ShiftArgs, Shifting, ShiftingArgs};
 use coil_kernels::topology::{Open, Topology};
 use coil_kernels::{Real, Vec3};
 pub use run_state::RunState;
 use std::fmt;
+
+/// The divergence of position, -sum_j V_j x_ij . grad W_ij, below which particle shifting takes
+/// a particle to be near a free surface (3 inside the fluid, where the calibrated gradient makes
+/// it exact on the lattice; about 1.5 on a flat surface): DualSPHysics's threshold in 3-D.
+const SURFACE_POSITION_DIVERGENCE: f64 = 2.75;
 
 /// Why a run stopped early.
 #[derive(Debug, Clone, PartialEq)]
@@ -144,7 +150,15 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
         let fluid_capacity = scene.simulation.max_fluid_particles.unwrap_or(0).max(initial.fluid.len());
         let boundary_count = initial.boundary.len();
         let continuity = mat.density_equation == DensityEquation::Continuity;
-        let fields = ModelFields { density_rate: continuity, ..M::FIELDS };
+        let shifting = (scene.simulation.particle_shifting > 0.0).then(|| {
+            let kernels = calibrated_kernels::<R>(mat.rest_density_kg_m3, s, h, mat.density_kernel);
+            Shifting {
+                coefficient: R::from_f64(scene.simulation.particle_shifting * h),
+                inverse_spacing_weight: R::ONE / kernels.spiky(R::from_f64(s * s)),
+                surface_divergence: R::from_f64(SURFACE_POSITION_DIVERGENCE),
+            }
+        });
+        let fields = ModelFields { density_rate: continuity, shift: shifting.is_some(), ..M::FIELDS };
         let mut particles = Particles::with_capacity(boundary_count + fluid_capacity, fields);
         for (k, &x) in initial.boundary.iter().enumerate() {
             particles.push(k as u32, x, [0.0; 3]);
@@ -203,6 +217,7 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
             density_kernel: mat.density_kernel,
             density_diffusivity: R::from_f64(mat.density_diffusion * 0.5 * h * mat.sound_speed_m_s),
             viscous_velocity: ts.viscous_velocity,
+            shifting,
         };
         let wall_mirror = (scene.simulation.walls == Walls::Mirrored)
             .then(|| [0, 1, 2].map(|a| initial.boundary_mirror.iter().map(|m| m[a]).collect()));
@@ -443,6 +458,22 @@ impl<R: Real, M: Model<R>> Schedule<R> for ForcesAndMotion<'_, R, M> {
                 density: v.density,
             });
         }
+        // Shifts over this step's positions, which leap-frog is about to move.
+        let shift = v.shift.zip(run.shifting);
+        if let Some((shift, shifting)) = shift {
+            passes.shifting(ShiftingArgs {
+                neighborhood: v.neighbors,
+                fluid,
+                shifting,
+                dt: R::from_f64(self.dt),
+                id: v.id,
+                velocity: v.velocity.read(),
+                shift,
+            });
+            for tube in run.inlet_tubes() {
+                passes.nozzle_shift(NozzleShiftArgs { fluid, tube, id: v.id, position: v.position.read(), shift });
+            }
+        }
         // Lines 17-19: leap-frog.
         passes.leapfrog(LeapfrogArgs {
             fluid,
@@ -455,5 +486,8 @@ impl<R: Real, M: Model<R>> Schedule<R> for ForcesAndMotion<'_, R, M> {
             velocity: v.velocity,
             topology: v.topology,
         });
+        if let Some((shift, _)) = shift {
+            passes.shift(ShiftArgs { topology: v.topology, shift: shift.read(), position: v.position });
+        }
     }
 }

@@ -137,7 +137,8 @@ pub struct MorrisModel<R>(pub Newtonian<R>);
 pub struct ShearThinningMorrisModel<Rh>(pub Rh);
 
 impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for StressModel<Rh> {
-    const FIELDS: ModelFields = ModelFields { stress: true, viscosity: false, velocity_gradient: false, density_rate: false };
+    const FIELDS: ModelFields =
+        ModelFields { stress: true, viscosity: false, velocity_gradient: false, density_rate: false, shift: false };
     type Law = Rh;
     fn law(&self) -> Self::Law {
         self.0
@@ -157,7 +158,8 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for StressModel<Rh> {
 }
 
 impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for HourglassStressModel<Rh, R> {
-    const FIELDS: ModelFields = ModelFields { stress: false, viscosity: true, velocity_gradient: true, density_rate: false };
+    const FIELDS: ModelFields =
+        ModelFields { stress: false, viscosity: true, velocity_gradient: true, density_rate: false, shift: false };
     type Law = Rh;
     fn law(&self) -> Self::Law {
         self.rheology
@@ -184,7 +186,8 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for HourglassStressModel<Rh, R
 }
 
 impl<R: Real> Model<R> for LaplacianModel<R> {
-    const FIELDS: ModelFields = ModelFields { stress: false, viscosity: false, velocity_gradient: false, density_rate: false };
+    const FIELDS: ModelFields =
+        ModelFields { stress: false, viscosity: false, velocity_gradient: false, density_rate: false, shift: false };
     type Law = Newtonian<R>;
     fn law(&self) -> Self::Law {
         self.0
@@ -196,7 +199,8 @@ impl<R: Real> Model<R> for LaplacianModel<R> {
 }
 
 impl<R: Real> Model<R> for MorrisModel<R> {
-    const FIELDS: ModelFields = ModelFields { stress: false, viscosity: false, velocity_gradient: false, density_rate: false };
+    const FIELDS: ModelFields =
+        ModelFields { stress: false, viscosity: false, velocity_gradient: false, density_rate: false, shift: false };
     type Law = Newtonian<R>;
     fn law(&self) -> Self::Law {
         self.0
@@ -207,7 +211,8 @@ impl<R: Real> Model<R> for MorrisModel<R> {
 }
 
 impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for ShearThinningMorrisModel<Rh> {
-    const FIELDS: ModelFields = ModelFields { stress: false, viscosity: true, velocity_gradient: false, density_rate: false };
+    const FIELDS: ModelFields =
+        ModelFields { stress: false, viscosity: true, velocity_gradient: false, density_rate: false, shift: false };
     type Law = Rh;
     fn law(&self) -> Self::Law {
         self.0

@@ -16,6 +16,8 @@ pub struct ModelFields {
     /// d rho / dt, where density comes from the continuity equation; density then carries
     /// state from step to step.
     pub density_rate: bool,
+    /// Each fluid particle's shift in this step, where the scene shifts particles.
+    pub shift: bool,
 }
 
 /// Every per-particle array of a run. Arrays hold `capacity` entries; the first `len` are live.
@@ -47,6 +49,9 @@ pub struct Particles<R> {
     /// d rho / dt (kg/(m^3 s)). Allocated only where density comes from the continuity
     /// equation.
     pub density_rate: Option<Vec<R>>,
+    /// This step's shift (m), computed over the step's positions and applied after leap-frog.
+    /// Allocated only where the scene shifts particles.
+    pub shift: Option<[Vec<R>; 3]>,
     /// Targets of the reorder, swapped with the field they receive.
     pub(crate) scratch_f64: Vec<f64>,
     pub(crate) scratch_real: Vec<R>,
@@ -74,6 +79,7 @@ impl<R: Real> Particles<R> {
                 .velocity_gradient
                 .then(|| core::array::from_fn(|_| core::array::from_fn(|_| zeros(capacity)))),
             density_rate: fields.density_rate.then(|| zeros(capacity)),
+            shift: fields.shift.then(|| core::array::from_fn(|_| zeros(capacity))),
             scratch_f64: zeros(capacity),
             scratch_real: zeros(capacity),
             scratch_u32: zeros(capacity),
@@ -120,6 +126,7 @@ impl<R: Real> Particles<R> {
             viscosity: self.viscosity.is_some(),
             velocity_gradient: self.velocity_gradient.is_some(),
             density_rate: self.density_rate.is_some(),
+            shift: self.shift.is_some(),
         }
     }
 
@@ -143,8 +150,9 @@ impl<R: Real> Particles<R> {
         let viscosity = if fields.viscosity { r } else { 0 };
         let gradient = if fields.velocity_gradient { 9 * r } else { 0 };
         let density_rate = if fields.density_rate { r } else { 0 };
+        let shift = if fields.shift { 3 * r } else { 0 };
         let scratch = 8 + r + 4;
-        position + velocities_and_acceleration + 4 + r + stress + viscosity + gradient + density_rate + scratch
+        position + velocities_and_acceleration + 4 + r + stress + viscosity + gradient + density_rate + shift + scratch
     }
 
     pub fn position_view(&self) -> Vec3View<'_, f64> {

@@ -9,6 +9,7 @@ use crate::simulation::particles::Particles;
 use crate::simulation::time_step::{Limit, TimeStepper};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::nozzle::NozzleTube;
+use coil_kernels::shifting_sun2017::Shifting;
 use coil_kernels::Real;
 
 pub struct RunState<R: Real, M: Model<R>> {
@@ -44,6 +45,9 @@ pub struct RunState<R: Real, M: Model<R>> {
     pub density_diffusivity: R,
     /// Which velocity the viscous terms read.
     pub viscous_velocity: ViscousVelocity,
+    /// Particle shifting's constants, where the scene shifts particles (the particles then
+    /// hold a shift).
+    pub shifting: Option<Shifting<R>>,
 }
 
 impl<R: Real, M: Model<R>> RunState<R, M> {

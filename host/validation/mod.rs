@@ -13,7 +13,7 @@ pub mod tradeoff;
 pub mod viscous_thread;
 
 use crate::output::plot::{Axis, Chart, Curve, Line, PALETTE};
-use crate::scene::{DensityEquation, PressureGradient, ViscosityOperator};
+use crate::scene::{PressureGradient, ViscosityOperator};
 use hydrostatic::Tank;
 use poiseuille::{cross_steady_velocity, relative_max_error, simulate, startup_velocity, Channel, CrossLaw};
 use std::path::Path;
@@ -493,19 +493,12 @@ pub fn jet_buckling(
 pub fn viscous_thread(
     across: f64,
     op: ViscosityOperator,
-    density_equation: DensityEquation,
-    clamp_negative_pressure: bool,
+    treatment: viscous_thread::Treatment,
     out: Option<&Path>,
 ) -> Result<CaseResult, String> {
-    let pressure = match (density_equation, clamp_negative_pressure) {
-        (DensityEquation::Summation, true) => "clamped pressure",
-        (DensityEquation::Summation, false) => "pressure as printed",
-        (DensityEquation::Continuity, true) => "continuity density, clamped pressure",
-        (DensityEquation::Continuity, false) => "continuity density",
-    };
-    let case = format!("viscous thread, {} across D, {}, {pressure}", across, operator_name(op));
+    let case = format!("viscous thread, {} across D, {}, {}", across, operator_name(op), treatment.name());
     let started = Instant::now();
-    let (scene, thread) = viscous_thread::thread_scene(across, op, density_equation, clamp_negative_pressure, 0.7)?;
+    let (scene, thread) = viscous_thread::thread_scene(across, op, treatment, 0.7)?;
     let reference = thread.profile()?;
     let slabs = viscous_thread::measure(&scene, 12, 0.0125, 0.5).map_err(|e| format!("{case}: {e}"))?;
     let error = slabs
@@ -549,13 +542,7 @@ pub fn viscous_thread(
                     },
                 ],
             };
-            let word = match (density_equation, clamp_negative_pressure) {
-                (DensityEquation::Summation, true) => "clamped",
-                (DensityEquation::Summation, false) => "printed",
-                (DensityEquation::Continuity, true) => "continuity_clamped",
-                (DensityEquation::Continuity, false) => "continuity",
-            };
-            save_plot(&chart, &dir.join(format!("thread_{}_{word}_{across}.png", scene_word(op))))
+            save_plot(&chart, &dir.join(format!("thread_{}_{}_{across}.png", scene_word(op), treatment.word())))
         })
         .transpose()?;
     let densities: Vec<String> = slabs.iter().map(|s| format!("{:.3}", s.density_ratio)).collect();

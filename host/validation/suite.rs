@@ -1,12 +1,12 @@
 //! `coil validate`: the cases, which of them decide the verdict, and the table they fill.
 
 use super::poiseuille::{Channel, CrossLaw};
+use super::viscous_thread::Treatment;
 use super::{
     cross_poiseuille, cross_poiseuille_in, huppert_spreading, hydrostatic_tank, jet_buckling, startup_poiseuille,
     startup_poiseuille_in, taylor_green, torus_ordering, viscous_thread, CaseResult, HOURGLASS_CONTROL,
 };
 use crate::output::write_atomically;
-use crate::scene::DensityEquation::{Continuity, Summation};
 use crate::scene::ViscosityOperator;
 use std::fmt;
 use std::path::Path;
@@ -140,8 +140,8 @@ fn cases(quick: bool, out: &Path) -> Vec<Case<'_>> {
     let thread_resolutions: &[f64] = if quick { &[5.0] } else { &[5.0, 8.0, 12.0] };
     for &across in thread_resolutions {
         for op in [ViscosityOperator::Stress, ViscosityOperator::Laplacian, ViscosityOperator::Morris] {
-            for (density, clamp) in [(Summation, true), (Summation, false), (Continuity, false)] {
-                cases.push(Case::one(Group::Thread, false, move || viscous_thread(across, op, density, clamp, out)));
+            for treatment in Treatment::COMPARED {
+                cases.push(Case::one(Group::Thread, false, move || viscous_thread(across, op, treatment, out)));
             }
         }
     }
@@ -226,8 +226,8 @@ mod tests {
         assert!(binding(Group::Jet, true).is_empty());
         // The thread, each operator, density and pressure treatment at 5 across (and 8, 12 in
         // full), is shown for comparison until an operator stretches it as the liquid does.
-        assert_eq!(binding(Group::Thread, true), [false; 9]);
-        assert_eq!(binding(Group::Thread, false), [false; 27]);
-        assert_eq!(cases(true, out).len(), 8 + 9 + 1 + 4 + 1 + 4 + 9);
+        assert_eq!(binding(Group::Thread, true), [false; 12]);
+        assert_eq!(binding(Group::Thread, false), [false; 36]);
+        assert_eq!(cases(true, out).len(), 8 + 9 + 1 + 4 + 1 + 4 + 12);
     }
 }

@@ -118,14 +118,64 @@ pub fn speed_at(profile: &[[f64; 2]], z: f64) -> f64 {
     a[1] + (b[1] - a[1]) * (z - a[0]) / (b[0] - a[0])
 }
 
+/// How a thread case treats density, pressure and the particles' order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Treatment {
+    pub density_equation: DensityEquation,
+    pub clamp_negative_pressure: bool,
+    /// `simulation.particle_shifting`'s coefficient, 0 for none.
+    pub particle_shifting: f64,
+}
+
+impl Treatment {
+    /// The treatments the validation suite compares: the paper's density sum with the pressure
+    /// clamped and as printed, the continuity equation, and the continuity equation with
+    /// particle shifting (A = 2).
+    pub const COMPARED: [Treatment; 4] = [
+        Treatment { density_equation: DensityEquation::Summation, clamp_negative_pressure: true, particle_shifting: 0.0 },
+        Treatment { density_equation: DensityEquation::Summation, clamp_negative_pressure: false, particle_shifting: 0.0 },
+        Treatment { density_equation: DensityEquation::Continuity, clamp_negative_pressure: false, particle_shifting: 0.0 },
+        Treatment { density_equation: DensityEquation::Continuity, clamp_negative_pressure: false, particle_shifting: 2.0 },
+    ];
+
+    /// How a case names it.
+    pub fn name(&self) -> String {
+        let density = match (self.density_equation, self.clamp_negative_pressure) {
+            (DensityEquation::Summation, true) => "clamped pressure",
+            (DensityEquation::Summation, false) => "pressure as printed",
+            (DensityEquation::Continuity, true) => "continuity density, clamped pressure",
+            (DensityEquation::Continuity, false) => "continuity density",
+        };
+        if self.particle_shifting > 0.0 {
+            format!("{density}, particle shifting A = {}", self.particle_shifting)
+        } else {
+            density.into()
+        }
+    }
+
+    /// How a plot's file name names it.
+    pub fn word(&self) -> String {
+        let density = match (self.density_equation, self.clamp_negative_pressure) {
+            (DensityEquation::Summation, true) => "clamped",
+            (DensityEquation::Summation, false) => "printed",
+            (DensityEquation::Continuity, true) => "continuity_clamped",
+            (DensityEquation::Continuity, false) => "continuity",
+        };
+        if self.particle_shifting > 0.0 {
+            format!("{density}_shifted")
+        } else {
+            density.into()
+        }
+    }
+}
+
 /// The shipped Newtonian jet falling `FALL_M` onto nothing: no plate, the domain's floor at
-/// y = 0, `across` particles across D, operator `op`, density by `density_equation`, negative
-/// pressure clamped or not, run to `end_time_s`; with the thread it should follow.
+/// y = 0, `across` particles across D, operator `op`, density, pressure and shifting by
+/// `treatment`, run to `end_time_s`; with the thread it should follow.
 pub fn thread_scene(
     across: f64,
     op: ViscosityOperator,
-    density_equation: DensityEquation,
-    clamp_negative_pressure: bool,
+    treatment: Treatment,
     end_time_s: f64,
 ) -> Result<(Scene, SlenderThread), String> {
     let mut scene = Scene::parse(NEWTONIAN_JET, "scenes/newtonian_jet.toml").map_err(|e| e.to_string())?;
@@ -135,8 +185,8 @@ pub fn thread_scene(
     };
     let material = &mut scene.material;
     material.particle_spacing_m = diameter / across;
-    material.clamp_negative_pressure = clamp_negative_pressure;
-    material.density_equation = density_equation;
+    material.clamp_negative_pressure = treatment.clamp_negative_pressure;
+    material.density_equation = treatment.density_equation;
     material.viscosity.operator = op;
     scene.boundaries.clear();
     let inlet = &mut scene.inlets[0];
@@ -146,6 +196,7 @@ pub fn thread_scene(
     scene.domain.max_m[1] = FALL_M + 0.03;
     scene.simulation.end_time_s = end_time_s;
     scene.simulation.max_fluid_particles = Some(4_000_000);
+    scene.simulation.particle_shifting = treatment.particle_shifting;
     scene.name = format!("viscous_thread_{across}");
     let thread = SlenderThread {
         nozzle_speed_m_s: scene.inlets[0].speed_m_s,

@@ -83,3 +83,26 @@ pub fn nozzle_pass<R: Real>(i: usize, a: &NozzleArgs<R>) {
         a.velocity_half.write(i, a.tube.velocity);
     }
 }
+
+/// Arguments of the pass that keeps the tube's fluid unshifted.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct NozzleShiftArgs<'a, R> {
+    pub fluid: Fluid<R>,
+    pub tube: NozzleTube<R>,
+    pub id: View<'a, u32>,
+    pub position: Vec3View<'a, f64>,
+    /// Zeroed inside the tube (m).
+    pub shift: Vec3ViewMut<'a, R>,
+}
+
+/// Runs between particle shifting and leap-frog: fluid particle `i` inside the tube keeps the
+/// inlet's lattice, on which the next layers are laid, so it is not shifted.
+#[inline(always)]
+pub fn nozzle_shift_pass<R: Real>(i: usize, a: &NozzleShiftArgs<R>) {
+    if a.fluid.is_boundary(a.id.at(i)) || !a.tube.contains(a.position.at(i)) {
+        return;
+    }
+    // SAFETY: invocation i owns entry i.
+    unsafe { a.shift.write(i, [R::ZERO; 3]) };
+}

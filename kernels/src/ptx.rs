@@ -24,7 +24,8 @@ use crate::diagnostics::{diagnostics_pass, DiagnosticsArgs, StateFigures};
 use crate::fluid_cells::{holds_fluid_pass, near_fluid_pass, HoldsFluidArgs, NearFluidArgs};
 use crate::leapfrog::{leapfrog_pass, LeapfrogArgs};
 use crate::mirrored_wall::{mirrored_wall_pass, MirroredWallArgs};
-use crate::nozzle::{nozzle_pass, NozzleArgs};
+use crate::nozzle::{nozzle_pass, nozzle_shift_pass, NozzleArgs, NozzleShiftArgs};
+use crate::shifting_sun2017::{shift_pass, shifting_pass, ShiftArgs, ShiftingArgs};
 use crate::topology::{Open, Periodic};
 use crate::view::{View, ViewMut};
 use crate::viscosity::hourglass_ganzenmuller2015::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
@@ -292,10 +293,16 @@ per_neighborhood_kernels!(
 );
 per_index_kernel!(nozzle_f32, NozzleArgs<'static, f32>, nozzle_pass::<f32>);
 per_index_kernel!(nozzle_f64, NozzleArgs<'static, f64>, nozzle_pass::<f64>);
+per_index_kernel!(nozzle_shift_f32, NozzleShiftArgs<'static, f32>, nozzle_shift_pass::<f32>);
+per_index_kernel!(nozzle_shift_f64, NozzleShiftArgs<'static, f64>, nozzle_shift_pass::<f64>);
 per_index_kernel!(density_integration_f32, DensityIntegrationArgs<'static, f32>, density_integration_pass::<f32>);
 per_index_kernel!(density_integration_f64, DensityIntegrationArgs<'static, f64>, density_integration_pass::<f64>);
 per_topology_kernels!(leapfrog_f32, leapfrog_periodic_f32, LeapfrogArgs<f32>, leapfrog_pass<f32>);
 per_topology_kernels!(leapfrog_f64, leapfrog_periodic_f64, LeapfrogArgs<f64>, leapfrog_pass<f64>);
+per_neighborhood_kernels!(shifting_f32, shifting_periodic_f32, ShiftingArgs<f32>, shifting_pass<f32>);
+per_neighborhood_kernels!(shifting_f64, shifting_periodic_f64, ShiftingArgs<f64>, shifting_pass<f64>);
+per_topology_kernels!(shift_f32, shift_periodic_f32, ShiftArgs<f32>, shift_pass<f32>);
+per_topology_kernels!(shift_f64, shift_periodic_f64, ShiftArgs<f64>, shift_pass<f64>);
 
 entry!(count_particles(i; count: View<'static, u32>, cell_key: View<'static, u32>, counts: Counters<'static>) {
     if i < count.at(0) as usize {
@@ -503,12 +510,22 @@ pub const ENTRIES: &[(&str, Emulated)] = {
         acceleration_hourglass_periodic_f64,
         nozzle_f32,
         nozzle_f64,
+        nozzle_shift_f32,
+        nozzle_shift_f64,
         density_integration_f32,
         density_integration_f64,
         leapfrog_f32,
         leapfrog_periodic_f32,
         leapfrog_f64,
         leapfrog_periodic_f64,
+        shifting_f32,
+        shifting_periodic_f32,
+        shifting_f64,
+        shifting_periodic_f64,
+        shift_f32,
+        shift_periodic_f32,
+        shift_f64,
+        shift_periodic_f64,
         count_particles,
         scan_chunk_totals,
         scan_offsets,
