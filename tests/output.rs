@@ -382,15 +382,16 @@ fn resume_refuses_what_it_cannot_continue() {
 /// the frames of a run never stopped: the inlets' layers and wobble, the ids and the capacity's
 /// clock carry on from the checkpoint. The capacity fills during the run, so the stop must also
 /// carry the time it filled. With density from the continuity equation the checkpoint carries
-/// each particle's density too.
+/// each particle's density too; particle shifting, run with it, keeps no state between steps.
 #[test]
 fn a_jet_stopped_by_its_program_resumes_where_it_was() {
-    for density in [coil::scene::DensityEquation::Summation, coil::scene::DensityEquation::Continuity] {
-        jet_stopped_by_its_program_resumes_where_it_was(density);
+    use coil::scene::DensityEquation::{Continuity, Summation};
+    for (density, shifting) in [(Summation, 0.0), (Continuity, 2.0)] {
+        jet_stopped_by_its_program_resumes_where_it_was(density, shifting);
     }
 }
 
-fn jet_stopped_by_its_program_resumes_where_it_was(density: coil::scene::DensityEquation) {
+fn jet_stopped_by_its_program_resumes_where_it_was(density: coil::scene::DensityEquation, shifting: f64) {
     use std::sync::atomic::{AtomicBool, Ordering};
     let mut scene = common::scene(&common::jet_scene(
         r#"nozzle = { shape = "circle", radius_m = 0.004 }"#,
@@ -399,6 +400,7 @@ fn jet_stopped_by_its_program_resumes_where_it_was(density: coil::scene::Density
     scene.simulation.end_time_s = 0.04;
     scene.simulation.max_fluid_particles = Some(80);
     scene.material.density_equation = density;
+    scene.simulation.particle_shifting = shifting;
     let dir = std::env::temp_dir().join(format!("coil-resume-jet-{density:?}-{}", std::process::id()));
     let (whole, stopped) = (dir.join("whole"), dir.join("stopped"));
     let done = coil::run::run_on(None, &scene, "jet.toml", &common::quiet_run_options(&whole)).expect("the whole run");

@@ -60,6 +60,8 @@ fn bad_scenes_exit_2_naming_file_and_field() {
         ("sound_speed_m_s = 20.0", "sound_speed_m_s = 0.0", "material.sound_speed_m_s"),
         ("nu0_m2_s = 0.05", "nu0_m2_s = 0.0", "material.viscosity.nu0_m2_s"),
         ("end_time_s = 1.0", "", "missing field `end_time_s`"),
+        ("end_time_s = 1.0", "end_time_s = 1.0\nparticle_shifting = -2.0", "simulation.particle_shifting"),
+        ("end_time_s = 1.0", "end_time_s = 1.0\nparticle_shifting = inf", "simulation.particle_shifting"),
         ("cross_n = 1.0", "cross_n = 1.0\nhourglass_control = -1.0", "material.viscosity.hourglass_control"),
         ("cross_n = 1.0", "cross_n = 1.0\nhourglass_control = 2.5", "material.viscosity.hourglass_control"),
         ("operator = \"stress\"", "operator = \"morris\"\nhourglass_control = 1.0", "material.viscosity.hourglass_control"),

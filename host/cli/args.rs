@@ -154,7 +154,7 @@ pub enum Command {
     /// binding case fails; the paper's operator below the binding resolution and on the Cross
     /// cases is shown for comparison.
     Validate {
-        /// Coarser resolutions and no jets: about 10 minutes on 2 cores; the full set takes hours.
+        /// Coarser resolutions and no jets: about half an hour on 2 cores; the full set takes hours.
         #[arg(long)]
         quick: bool,
         /// Run only these groups of cases (comma-separated): poiseuille, cross, tank,

@@ -78,7 +78,8 @@ impl fmt::Display for Verdict {
     }
 }
 
-/// The cases of the suite, quick (about 10 minutes on 2 cores) or full (hours); plots go to `out`.
+/// The cases of the suite, quick (about half an hour on 2 cores, the thread's twelve runs 17
+/// minutes of it) or full (hours); plots go to `out`.
 ///
 /// The rule of which cases bind: the paper's operator is held to its tolerance at 30 particles
 /// across (40 for the vortex); coarser runs show its convergence, and its Cross cases, which its
@@ -87,8 +88,9 @@ impl fmt::Display for Verdict {
 /// across (K = 100 s, n = 0.5 measured 0.031 at 10). Huppert's exponent is approached too slowly
 /// by the paper's operator to meet 10 % at 8 and 10 across, with or without the control. Of the
 /// jets, the paper's operator must buckle at H/D = 12 and stay straight at 3 (Fig. 5); the
-/// others are Fig. 6's comparison. The viscous thread is shown for comparison: no operator
-/// stretches it as the liquid does yet (docs/validation.md).
+/// others are Fig. 6's comparison. The viscous thread is shown for comparison: only with particle
+/// shifting does an operator approach the liquid's stretch, 6 % fast at 8 across
+/// (docs/validation.md).
 fn cases(quick: bool, out: &Path) -> Vec<Case<'_>> {
     let out = Some(out);
     let resolutions: &[usize] = if quick { &[10, 20] } else { &[10, 20, 30] };
@@ -225,7 +227,7 @@ mod tests {
         assert_eq!(binding(Group::Jet, false), [true, true, false, false, false, false, false, false]);
         assert!(binding(Group::Jet, true).is_empty());
         // The thread, each operator, density and pressure treatment at 5 across (and 8, 12 in
-        // full), is shown for comparison until an operator stretches it as the liquid does.
+        // full), is shown for comparison until a case meets 5 % at a resolution the suite runs.
         assert_eq!(binding(Group::Thread, true), [false; 12]);
         assert_eq!(binding(Group::Thread, false), [false; 36]);
         assert_eq!(cases(true, out).len(), 8 + 9 + 1 + 4 + 1 + 4 + 12);
