@@ -34,7 +34,7 @@ use std::fmt;
 
 /// The divergence of position, -sum_j V_j x_ij . grad W_ij, below which particle shifting takes
 /// a particle to be near a free surface (3 inside the fluid, where the calibrated gradient makes
-/// it exact on the lattice; about 1.5 on a flat surface): DualSPHysics's threshold in 3-D.
+/// it exact on the lattice): DualSPHysics's threshold in 3-D.
 const SURFACE_POSITION_DIVERGENCE: f64 = 2.75;
 
 /// Why a run stopped early.

@@ -18,9 +18,8 @@
 //! [`nozzle::nozzle_pass`] (jet scenes only),
 //! [`continuity_molteni2009::density_integration_pass`] (with the continuity equation),
 //! [`shifting_sun2017::shifting_pass`] and [`nozzle::nozzle_shift_pass`] (with particle
-//! shifting), [`leapfrog::leapfrog_pass`]
-//! and [`shifting_sun2017::shift_pass`] (with particle shifting); then [`diagnostics`] guards the
-//! run.
+//! shifting), [`leapfrog::leapfrog_pass`] and [`shifting_sun2017::shift_pass`] (with particle
+//! shifting); then [`diagnostics`] guards the run.
 #![no_std]
 #![allow(clippy::neg_cmp_op_on_partial_ord, reason = "`!(a < b)` is how a check here also refuses NaN")]
 #![allow(clippy::needless_range_loop, reason = "a loop over the axes indexes several per-axis arrays at once")]
