@@ -205,9 +205,9 @@ pub enum ViscosityOperator {
 /// bound does not count.
 pub const MAX_HOURGLASS_CONTROL: f64 = 2.0;
 
-/// Largest `particle_shifting` coefficient a scene may ask for: five times the usual 2 (the
-/// viscous thread measured 2, 5 and 10 alike, docs/validation.md). Above it a disordered
-/// particle would be shifted several times farther in a step than the flow moves it.
+/// Largest `particle_shifting` coefficient a scene may ask for: five times the usual 2 (on the
+/// viscous thread 5 and 10 did no better than 2). Above it a disordered particle would be
+/// shifted several times farther in a step than the flow moves it.
 pub const MAX_PARTICLE_SHIFTING: f64 = 10.0;
 
 /// Kinematic viscosities (m^2/s) and the Cross model, Eq. (3).
