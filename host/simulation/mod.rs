@@ -150,13 +150,11 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
         let fluid_capacity = scene.simulation.max_fluid_particles.unwrap_or(0).max(initial.fluid.len());
         let boundary_count = initial.boundary.len();
         let continuity = mat.density_equation == DensityEquation::Continuity;
-        let shifting = (scene.simulation.particle_shifting > 0.0).then(|| {
-            let kernels = calibrated_kernels::<R>(mat.rest_density_kg_m3, s, h, mat.density_kernel);
-            Shifting {
-                coefficient: R::from_f64(scene.simulation.particle_shifting * h),
-                inverse_spacing_weight: R::ONE / kernels.spiky(R::from_f64(s * s)),
-                surface_divergence: R::from_f64(SURFACE_POSITION_DIVERGENCE),
-            }
+        let kernels = calibrated_kernels::<R>(mat.rest_density_kg_m3, s, h, mat.density_kernel);
+        let shifting = (scene.simulation.particle_shifting > 0.0).then(|| Shifting {
+            coefficient: R::from_f64(scene.simulation.particle_shifting * h),
+            inverse_spacing_weight: R::ONE / kernels.spiky(R::from_f64(s * s)),
+            surface_divergence: R::from_f64(SURFACE_POSITION_DIVERGENCE),
         });
         let fields = ModelFields { density_rate: continuity, shift: shifting.is_some(), ..M::FIELDS };
         let mut particles = Particles::with_capacity(boundary_count + fluid_capacity, fields);
@@ -178,7 +176,7 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
             pressure_floor: R::from_f64(if mat.clamp_negative_pressure { 0.0 } else { f64::NEG_INFINITY }),
             pressure_pair_weight: R::from_f64(mat.pressure_gradient.pair_weight()),
             gravity: Vec3::from_f64(g),
-            kernels: calibrated_kernels(mat.rest_density_kg_m3, s, h, mat.density_kernel),
+            kernels,
             boundary_count: boundary_count as u32,
         };
         let ts = &scene.simulation.time_step;

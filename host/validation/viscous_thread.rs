@@ -138,14 +138,19 @@ impl Treatment {
         Treatment { density_equation: DensityEquation::Continuity, clamp_negative_pressure: false, particle_shifting: 2.0 },
     ];
 
+    /// How a case names its density and pressure, and how a plot's file name does.
+    fn density_names(&self) -> (&'static str, &'static str) {
+        match (self.density_equation, self.clamp_negative_pressure) {
+            (DensityEquation::Summation, true) => ("clamped pressure", "clamped"),
+            (DensityEquation::Summation, false) => ("pressure as printed", "printed"),
+            (DensityEquation::Continuity, true) => ("continuity density, clamped pressure", "continuity_clamped"),
+            (DensityEquation::Continuity, false) => ("continuity density", "continuity"),
+        }
+    }
+
     /// How a case names it.
     pub fn name(&self) -> String {
-        let density = match (self.density_equation, self.clamp_negative_pressure) {
-            (DensityEquation::Summation, true) => "clamped pressure",
-            (DensityEquation::Summation, false) => "pressure as printed",
-            (DensityEquation::Continuity, true) => "continuity density, clamped pressure",
-            (DensityEquation::Continuity, false) => "continuity density",
-        };
+        let density = self.density_names().0;
         if self.particle_shifting > 0.0 {
             format!("{density}, particle shifting A = {}", self.particle_shifting)
         } else {
@@ -155,12 +160,7 @@ impl Treatment {
 
     /// How a plot's file name names it.
     pub fn word(&self) -> String {
-        let density = match (self.density_equation, self.clamp_negative_pressure) {
-            (DensityEquation::Summation, true) => "clamped",
-            (DensityEquation::Summation, false) => "printed",
-            (DensityEquation::Continuity, true) => "continuity_clamped",
-            (DensityEquation::Continuity, false) => "continuity",
-        };
+        let density = self.density_names().1;
         if self.particle_shifting > 0.0 {
             format!("{density}_shifted")
         } else {

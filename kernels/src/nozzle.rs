@@ -36,6 +36,12 @@ pub struct NozzleTube<R> {
 }
 
 impl<R: Real> NozzleTube<R> {
+    /// Whether particle `i` is fluid inside the bore, whose motion the tube sets.
+    #[inline(always)]
+    fn moves(&self, i: usize, fluid: &Fluid<R>, id: &View<u32>, position: &Vec3View<f64>) -> bool {
+        !fluid.is_boundary(id.at(i)) && self.contains(position.at(i))
+    }
+
     /// Whether a point at `x` (m) lies inside the bore, between the tube's inlet and its exit.
     #[inline(always)]
     pub fn contains(&self, x: [f64; 3]) -> bool {
@@ -74,7 +80,7 @@ pub struct NozzleArgs<'a, R> {
 /// the tube's velocity, whatever the forces on it.
 #[inline(always)]
 pub fn nozzle_pass<R: Real>(i: usize, a: &NozzleArgs<R>) {
-    if a.fluid.is_boundary(a.id.at(i)) || !a.tube.contains(a.position.at(i)) {
+    if !a.tube.moves(i, &a.fluid, &a.id, &a.position) {
         return;
     }
     // SAFETY: invocation i owns entry i.
@@ -100,7 +106,7 @@ pub struct NozzleShiftArgs<'a, R> {
 /// inlet's lattice, on which the next layers are laid, so it is not shifted.
 #[inline(always)]
 pub fn nozzle_shift_pass<R: Real>(i: usize, a: &NozzleShiftArgs<R>) {
-    if a.fluid.is_boundary(a.id.at(i)) || !a.tube.contains(a.position.at(i)) {
+    if !a.tube.moves(i, &a.fluid, &a.id, &a.position) {
         return;
     }
     // SAFETY: invocation i owns entry i.
