@@ -8,6 +8,7 @@ use coil::simulation::backend::Backend as _;
 use coil::simulation::model::{cross_law, LaplacianModel, Model, StressModel};
 use coil::simulation::Simulation;
 use coil_kernels::cross_viscosity::{Cross, Newtonian};
+use coil_kernels::velocity_gradient::KernelSum;
 use coil_kernels::Real;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::path::Path;
@@ -47,8 +48,8 @@ fn bench_variant<R: Real, M: Model<R>>(c: &mut Criterion, label: &str, model: im
     group.finish();
 }
 
-fn cross<R: Real>(scene: &Scene) -> StressModel<Cross<R>> {
-    StressModel(cross_law(&scene.material.viscosity))
+fn cross<R: Real>(scene: &Scene) -> StressModel<Cross<R>, KernelSum> {
+    StressModel(cross_law(&scene.material.viscosity), KernelSum)
 }
 
 fn laplacian<R: Real>(scene: &Scene) -> LaplacianModel<R> {

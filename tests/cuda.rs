@@ -31,8 +31,10 @@ use coil_kernels::fluid_cells::{HoldsFluidArgs, NearFluidArgs};
 use coil_kernels::leapfrog::LeapfrogArgs;
 use coil_kernels::mirrored_wall::MirroredWallArgs;
 use coil_kernels::nozzle::{NozzleArgs, NozzleShiftArgs};
+use coil_kernels::renormalization_bonet1999::Renormalized;
 use coil_kernels::shifting_sun2017::{ShiftArgs, ShiftingArgs};
 use coil_kernels::topology::{Open, Periodic, Topology};
+use coil_kernels::velocity_gradient::KernelSum;
 use coil_kernels::view::{View, ViewMut};
 use coil_kernels::viscosity::hourglass_ganzenmuller2015::{HourglassControlledStress, VelocityGradientArgs};
 use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
@@ -87,8 +89,10 @@ fn ptx_entry_parameters_match_the_host_argument_layouts() {
         add("density_spiky", size_of::<DensityArgs<R, Neighborhood<T>>>());
         add("continuity", size_of::<ContinuityArgs<R, Neighborhood<T>>>());
         add("continuity_spiky", size_of::<ContinuityArgs<R, Neighborhood<T>>>());
-        add("stress_newtonian", size_of::<StressArgs<R, Newtonian<R>, Neighborhood<T>>>());
-        add("stress_cross", size_of::<StressArgs<R, Cross<R>, Neighborhood<T>>>());
+        add("stress_newtonian", size_of::<StressArgs<R, Newtonian<R>, KernelSum, Neighborhood<T>>>());
+        add("stress_cross", size_of::<StressArgs<R, Cross<R>, KernelSum, Neighborhood<T>>>());
+        add("stress_newtonian_renormalized", size_of::<StressArgs<R, Newtonian<R>, Renormalized, Neighborhood<T>>>());
+        add("stress_cross_renormalized", size_of::<StressArgs<R, Cross<R>, Renormalized, Neighborhood<T>>>());
         add("acceleration_stress", size_of::<AccelerationArgs<R, StressDivergence<R>, Neighborhood<T>>>());
         add("acceleration_laplacian", size_of::<AccelerationArgs<R, VelocityLaplacian<R>, Neighborhood<T>>>());
         add("shear_viscosity_cross", size_of::<ShearViscosityArgs<R, Cross<R>, Neighborhood<T>>>());
@@ -204,8 +208,8 @@ fn dam_break() -> Scene {
     Scene::parse(&common::set(&text, &["material.particle_spacing_m=0.04"]), "dam_break.toml").expect("valid")
 }
 
-fn cross<R: Real>(scene: &Scene) -> StressModel<Cross<R>> {
-    StressModel(cross_law(&scene.material.viscosity))
+fn cross<R: Real>(scene: &Scene) -> StressModel<Cross<R>, KernelSum> {
+    StressModel(cross_law(&scene.material.viscosity), KernelSum)
 }
 
 /// Fluid positions (m) and velocities (m/s) by particle id.
@@ -408,7 +412,7 @@ fn small_jet() -> Scene {
 #[test]
 fn a_jet_on_the_gpu_agrees_with_the_cpu() {
     let scene = small_jet();
-    let model = StressModel(Newtonian { nu0: 0.001 });
+    let model = StressModel(Newtonian { nu0: 0.001 }, KernelSum);
     for engine in engines() {
         let (cpu, on_gpu) = both_with::<f64, _>(engine.open(), &scene, model, 300, 2e-4);
         assert!(cpu.run.removed > 0, "no particle left the domain: the test would not see the drop");
@@ -427,7 +431,7 @@ fn a_jet_on_the_gpu_agrees_with_the_cpu() {
 fn the_continuity_density_on_the_gpu_agrees_with_the_cpu() {
     let mut scene = small_jet();
     scene.material.density_equation = coil::scene::DensityEquation::Continuity;
-    let model = StressModel(Newtonian { nu0: 0.001 });
+    let model = StressModel(Newtonian { nu0: 0.001 }, KernelSum);
     for engine in engines() {
         let (cpu, on_gpu) = both_with::<f64, _>(engine.open(), &scene, model, 300, 2e-4);
         assert!(cpu.run.removed > 0, "no particle left the domain: the test would not see the drop");
@@ -457,7 +461,7 @@ fn the_continuity_density_on_the_gpu_agrees_with_the_cpu() {
 fn particle_shifting_on_the_gpu_agrees_with_the_cpu() {
     let mut scene = small_jet();
     scene.simulation.particle_shifting = 2.0;
-    let model = StressModel(Newtonian { nu0: 0.001 });
+    let model = StressModel(Newtonian { nu0: 0.001 }, KernelSum);
     let initial = initial_particles(&small_jet(), "test scene").expect("valid");
     let mut unshifted = Simulation::<f64, _>::new(&small_jet(), &initial, model);
     for _ in 0..300 {
@@ -483,6 +487,36 @@ fn particle_shifting_on_the_gpu_agrees_with_the_cpu() {
             assert_eq!(Some(x), plain.get(id), "particle {id} in the tube was shifted");
         }
         assert!(worst <= engine.f64_tolerance_m(), "{engine:?}, shifted jet: positions differ by {worst:.3e} m");
+    }
+}
+
+/// The jet with the paper's operator reading the renormalized velocity gradient: its own stress
+/// entries, whose second moment sum and 3x3 inverse the device runs as the CPU does. The
+/// renormalization moves the jet measurably against Eq. (8) as printed.
+#[test]
+fn the_renormalized_gradient_on_the_gpu_agrees_with_the_cpu() {
+    let mut scene = small_jet();
+    scene.material.viscosity.velocity_gradient = coil::scene::VelocityGradient::Renormalized;
+    let model = StressModel(Newtonian { nu0: 0.001 }, Renormalized);
+    let initial = initial_particles(&small_jet(), "test scene").expect("valid");
+    let mut printed = Simulation::<f64, _>::new(&small_jet(), &initial, StressModel(Newtonian { nu0: 0.001 }, KernelSum));
+    for _ in 0..300 {
+        printed.step_with(2e-4, coil::simulation::time_step::Limit::Acoustic).expect("stable");
+    }
+    let printed: std::collections::HashMap<u32, [f64; 3]> =
+        state_by_id(printed.particles()).into_iter().map(|(id, x, _)| (id, x)).collect();
+    for engine in engines() {
+        let (cpu, on_gpu) = both_with::<f64, _>(engine.open(), &scene, model, 300, 2e-4);
+        assert_eq!(on_gpu.run.fluid_count(), cpu.run.fluid_count(), "{engine:?}: fluid particles");
+        let renormalized = state_by_id(cpu.particles());
+        let moved = renormalized
+            .iter()
+            .filter_map(|(id, x, _)| printed.get(id).map(|y| (0..3).map(|k| (x[k] - y[k]).abs()).fold(0.0, f64::max)))
+            .fold(0.0, f64::max);
+        let worst = largest_position_difference(&renormalized, &state_by_id(on_gpu.particles()));
+        println!("{engine:?}, renormalized jet: {moved:.3e} m from Eq. (8)'s, {worst:.3e} m between backends");
+        assert!(moved > 1e-6, "the renormalization moved the jet by {moved:.3e} m only: the test would not see it");
+        assert!(worst <= engine.f64_tolerance_m(), "{engine:?}, renormalized jet: positions differ by {worst:.3e} m");
     }
 }
 
@@ -760,13 +794,14 @@ fn random_stages(engine: Engine, seed: u64) {
         };
         let stress_args = StressArgs {
             neighborhood,
+            gradient: KernelSum,
             fluid,
             rheology,
             velocity: Vec3View::new(&velocity[0], &velocity[1], &velocity[2]),
             density: View::new(&density),
             stress: stress_view,
         };
-        (0..live).for_each(|i| stress_pass::<f64, Cross<f64>, _>(i, &stress_args));
+        (0..live).for_each(|i| stress_pass::<f64, Cross<f64>, KernelSum, _>(i, &stress_args));
         let [ax, ay, az] = &mut acceleration;
         let acceleration_args = AccelerationArgs {
             neighborhood,
@@ -805,6 +840,7 @@ fn random_stages(engine: Engine, seed: u64) {
     let density_args = DensityArgs { neighborhood, fluid, density: device_density.view_mut(live) };
     let stress_args = StressArgs {
         neighborhood,
+        gradient: KernelSum,
         fluid,
         rheology,
         velocity: vec3_view(&velocity_on_device, live),

@@ -7,6 +7,7 @@ use coil::run::RunError;
 use coil::scene::particle_limit::ParticleLimit;
 use coil::scene::setup::{initial_particles, initial_particles_within};
 use coil::scene::{Scene, SceneError};
+use coil_kernels::velocity_gradient::KernelSum;
 use common::{coil, quiet_run_options, set};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -306,7 +307,7 @@ fn a_non_finite_value_stops_the_run_before_a_frame_holds_it() {
     use coil_kernels::cross_viscosity::Newtonian;
     let scene = Scene::parse(&shipped("dam_break.toml"), "s.toml").expect("the dam break");
     let initial = initial_particles(&scene, "s.toml").expect("particles");
-    let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.05 }));
+    let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.05 }, KernelSum));
     sim.step().expect("a step");
     let mut frame = coil::output::frame::Frame::default();
     frame.capture(&sim.run, sim.host());

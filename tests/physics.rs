@@ -15,6 +15,7 @@ use coil_kernels::view::{SymTensorView, View};
 
 /// Earth's gravity, for the test boxes that have none.
 const GRAVITY: &str = "material.gravity_m_s2=[0.0, -9.8, 0.0]";
+use coil_kernels::velocity_gradient::KernelSum;
 use coil_kernels::viscosity::stress_andrade2014::StressDivergence;
 
 fn simulation<M: Model<f64>>(text: &str, model: M) -> Simulation<f64, M> {
@@ -30,7 +31,7 @@ fn position(sim: &Simulation<f64, impl Model<f64>>, i: usize) -> [f64; 3] {
 #[test]
 fn velocity_gradient_of_a_linear_field_in_the_interior() {
     let s = 0.01;
-    let mut sim = simulation(&common::box_scene(s, [0.12; 3], [0.12; 3], ""), StressModel(Newtonian { nu0: 0.01 }));
+    let mut sim = simulation(&common::box_scene(s, [0.12; 3], [0.12; 3], ""), StressModel(Newtonian { nu0: 0.01 }, KernelSum));
     let g = [[0.3, -1.2, 0.5], [2.0, 0.1, -0.7], [0.4, 0.9, -0.4]];
     let n = sim.particles().len();
     for i in 0..n {
@@ -79,7 +80,7 @@ fn pressure_and_viscous_forces_conserve_momentum() {
     // A jittered block in free space: no walls, no gravity, every pair force inside the set.
     let text = common::set(&common::box_scene(0.01, [0.1; 3], [0.1; 3], ""), &["boundary=[]"]);
     let cross = Cross { nu0: 0.5, nu_inf: 0.05, k: 1.0, n: 1.0 };
-    let mut sim = simulation(&text, StressModel(cross));
+    let mut sim = simulation(&text, StressModel(cross, KernelSum));
     assert_eq!(sim.run.boundary_count(), 0);
     let n = sim.particles().len();
     let mut seed = 12345u64;
@@ -114,7 +115,7 @@ fn pressure_and_viscous_forces_conserve_momentum() {
 fn laplacian_model_runs_and_is_not_the_stress_model() {
     let text = common::set(&common::box_scene(0.02, [0.2, 0.3, 0.2], [0.2, 0.2, 0.2], ""), &[GRAVITY]);
     let mut a = simulation(&text, LaplacianModel(Newtonian { nu0: 0.01 }));
-    let mut b = simulation(&text, StressModel(Newtonian { nu0: 0.01 }));
+    let mut b = simulation(&text, StressModel(Newtonian { nu0: 0.01 }, KernelSum));
     assert!(a.particles().stress.is_none(), "the Laplacian operator allocates no stress");
     for _ in 0..50 {
         a.step().expect("stable");
@@ -126,7 +127,7 @@ fn laplacian_model_runs_and_is_not_the_stress_model() {
 #[test]
 fn fluid_at_rest_without_gravity_stays_exactly_at_rest() {
     // A box filled with fluid on the lattice: every density is rho0, every pressure zero.
-    let mut sim = simulation(&common::box_scene(0.02, [0.2; 3], [0.2; 3], ""), StressModel(Newtonian { nu0: 0.01 }));
+    let mut sim = simulation(&common::box_scene(0.02, [0.2; 3], [0.2; 3], ""), StressModel(Newtonian { nu0: 0.01 }, KernelSum));
     for _ in 0..100 {
         sim.step().expect("stable");
     }
@@ -140,7 +141,7 @@ fn fluid_at_rest_under_gravity_stays_near_rest() {
     // start from uniform density sends acoustic waves of speed amplitude ~ g H / c.
     let (h_m, c, g) = (0.2, 20.0, 9.8);
     let text = common::set(&common::box_scene(0.02, [0.2; 3], [0.2; 3], ""), &[GRAVITY]);
-    let mut sim = simulation(&text, StressModel(Newtonian { nu0: 0.01 }));
+    let mut sim = simulation(&text, StressModel(Newtonian { nu0: 0.01 }, KernelSum));
     let mut max_speed = 0.0f64;
     while sim.run.time < 0.3 {
         sim.step().expect("stable");
@@ -160,7 +161,7 @@ fn fluid_at_rest_under_gravity_stays_near_rest() {
 #[test]
 fn neighbor_search_equals_brute_force() {
     let text = common::box_scene(0.01, [0.08; 3], [0.08; 3], "");
-    let mut sim = simulation(&text, StressModel(Newtonian { nu0: 0.01 }));
+    let mut sim = simulation(&text, StressModel(Newtonian { nu0: 0.01 }, KernelSum));
     let n = sim.particles().len();
     let mut seed = 99u64;
     for i in 0..n {
@@ -196,7 +197,7 @@ fn results_do_not_depend_on_the_thread_count_or_the_calling_thread() {
     let text = common::set(&common::box_scene(0.02, [0.3, 0.3, 0.2], [0.12, 0.2, 0.2], ""), &[GRAVITY]);
     let cross = Cross { nu0: 0.05, nu_inf: 0.005, k: 1.0, n: 1.0 };
     let steps = || {
-        let mut sim = simulation(&text, StressModel(cross));
+        let mut sim = simulation(&text, StressModel(cross, KernelSum));
         for _ in 0..60 {
             sim.step().expect("stable");
         }
@@ -255,18 +256,18 @@ fn the_cpu_neighbor_lists_give_the_grids_results_to_the_bit() {
     }
     let cross = Cross { nu0: 0.05, nu_inf: 0.005, k: 1.0, n: 1.0 };
     let dam = common::set(&common::box_scene(0.02, [0.3, 0.3, 0.2], [0.12, 0.2, 0.2], ""), &[GRAVITY]);
-    compare("dam break, paper's operator", &dam, StressModel(cross), 40);
+    compare("dam break, paper's operator", &dam, StressModel(cross, KernelSum), 40);
     compare("dam break, hourglass control", &dam, HourglassStressModel { rheology: cross, coefficient: 1.0 }, 40);
     compare("dam break, Morris's shear-thinning operator", &dam, ShearThinningMorrisModel(cross), 40);
     compare("dam break, Laplacian operator", &dam, LaplacianModel(Newtonian { nu0: 0.05 }), 40);
     let mirrored = common::set(&dam, &["simulation.walls=mirrored"]);
-    compare("dam break, mirrored walls", &mirrored, StressModel(cross), 40);
+    compare("dam break, mirrored walls", &mirrored, StressModel(cross, KernelSum), 40);
     // The jet lands on a plate 12 mm below the nozzle at 0.02 s and spreads.
     let jet = common::jet_scene(
         "nozzle = { shape = \"circle\", radius_m = 0.006 }",
         "wobble_m = 0.0005\n[[boundary]]\nshape = \"plate\"\nheight_m = -0.012\nmin_xz_m = [-0.02, -0.02]\nmax_xz_m = [0.02, 0.02]",
     );
-    compare("jet", &jet, StressModel(Newtonian { nu0: 0.001 }), 2000);
+    compare("jet", &jet, StressModel(Newtonian { nu0: 0.001 }, KernelSum), 2000);
     // A sheared periodic slab: particles cross the periodic faces and their neighbors' offsets
     // are the nearest images'.
     let slab = "name = \"slab\"\n[material]\nparticle_spacing_m = 0.01\nsound_speed_m_s = 20.0\n\
@@ -274,7 +275,7 @@ fn the_cpu_neighbor_lists_give_the_grids_results_to_the_bit() {
                 min_m = [0.0, -0.05, 0.0]\nmax_m = [0.1, 0.2, 0.1]\nperiodic = [true, false, true]\n\
                 [simulation]\nend_time_s = 1.0\nprecision = \"f64\"\n[[boundary]]\nshape = \"plate\"\n\
                 height_m = 0.0\n[[fluid_block]]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [0.1, 0.06, 0.1]\n";
-    compare("periodic slab", slab, StressModel(cross), 60);
+    compare("periodic slab", slab, StressModel(cross, KernelSum), 60);
 }
 
 /// Eq. (9) reads the stress it is given: a stress linear in position, tau_xx = A x,
@@ -287,7 +288,7 @@ fn the_cpu_neighbor_lists_give_the_grids_results_to_the_bit() {
 /// a density read from the wrong particle, misses by order one.
 #[test]
 fn stress_divergence_reads_the_stress_it_is_given() {
-    let sim = simulation(&common::box_scene(0.02, [0.2; 3], [0.2; 3], ""), StressModel(Newtonian { nu0: 0.01 }));
+    let sim = simulation(&common::box_scene(0.02, [0.2; 3], [0.2; 3], ""), StressModel(Newtonian { nu0: 0.01 }, KernelSum));
     let p = sim.particles();
     let n = p.len();
     let (a, b, c, d) = (3.0e3, -2.0e3, 1.5e3, 2.5e3);

@@ -7,6 +7,7 @@ use coil::scene::Scene;
 use coil::simulation::model::StressModel;
 use coil::simulation::Simulation;
 use coil_kernels::cross_viscosity::Newtonian;
+use coil_kernels::velocity_gradient::KernelSum;
 use common::coil;
 use std::path::Path;
 
@@ -30,7 +31,7 @@ fn every_shipped_scene_loads_and_steps() {
         }
         let initial = initial_particles(&scene, &path.display().to_string()).unwrap_or_else(|e| panic!("{e}"));
         let nu0 = scene.material.viscosity.nu0_m2_s;
-        let mut sim = Simulation::<f32, _>::new(&scene, &initial, StressModel(Newtonian { nu0: nu0 as f32 }));
+        let mut sim = Simulation::<f32, _>::new(&scene, &initial, StressModel(Newtonian { nu0: nu0 as f32 }, KernelSum));
         for _ in 0..3 {
             sim.step().unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         }
@@ -65,6 +66,12 @@ fn bad_scenes_exit_2_naming_file_and_field() {
         ("cross_n = 1.0", "cross_n = 1.0\nhourglass_control = -1.0", "material.viscosity.hourglass_control"),
         ("cross_n = 1.0", "cross_n = 1.0\nhourglass_control = 2.5", "material.viscosity.hourglass_control"),
         ("operator = \"stress\"", "operator = \"morris\"\nhourglass_control = 1.0", "material.viscosity.hourglass_control"),
+        (
+            "operator = \"stress\"",
+            "operator = \"morris\"\nvelocity_gradient = \"renormalized\"",
+            "material.viscosity.velocity_gradient",
+        ),
+        ("operator = \"stress\"", "operator = \"stress\"\nvelocity_gradient = \"bonet\"", "velocity_gradient"),
     ];
     for (k, (from, to, field)) in cases.iter().enumerate() {
         assert!(good.contains(from), "{from}");

@@ -6,6 +6,7 @@ mod common;
 use coil::run::{run, RunError, Summary};
 use coil::scene::Scene;
 use coil::simulation::time_step::StabilityBound;
+use coil_kernels::velocity_gradient::KernelSum;
 use common::quiet_run_options;
 use std::path::PathBuf;
 
@@ -280,7 +281,7 @@ fn coincident_particles_get_finite_forces() {
     let twin = initial.fluid[7];
     initial.fluid.push(twin);
     initial.fluid_velocity.push([0.1, 0.0, 0.0]);
-    let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.01 }));
+    let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.01 }, KernelSum));
     for _ in 0..50 {
         sim.step().expect("coincident particles do not blow up the run");
     }

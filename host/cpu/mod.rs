@@ -23,6 +23,7 @@ use coil_kernels::mirrored_wall::{mirrored_wall_pass, MirroredWallArgs};
 use coil_kernels::nozzle::{nozzle_pass, nozzle_shift_pass, NozzleArgs, NozzleShiftArgs};
 use coil_kernels::shifting_sun2017::{shift_pass, shifting_pass, ShiftArgs, ShiftingArgs};
 use coil_kernels::topology::{Open, Periodic, Topology};
+use coil_kernels::velocity_gradient::GradientEstimate;
 use coil_kernels::view::{Vec3View, View};
 use coil_kernels::viscosity::hourglass_ganzenmuller2015::{velocity_gradient_pass, VelocityGradientArgs};
 use coil_kernels::viscosity::laplacian_morris1997::{shear_viscosity_pass, ShearViscosityArgs};
@@ -194,7 +195,7 @@ impl<R: Real, T: Topology, N: Neighbors + Sync> Passes<R, T, N> for CpuPasses {
     fn mirrored_wall(&mut self, args: MirroredWallArgs<'_, R, T>) {
         launch(self.n, |i| mirrored_wall_pass(i, &args));
     }
-    fn stress<Rh: Rheology<R>>(&mut self, args: StressArgs<'_, R, Rh, N>) {
+    fn stress<Rh: Rheology<R>, G: GradientEstimate>(&mut self, args: StressArgs<'_, R, Rh, G, N>) {
         launch(self.n, |i| stress_pass(i, &args));
     }
     fn shear_viscosity<Rh: Rheology<R>>(&mut self, args: ShearViscosityArgs<'_, R, Rh, N>) {

@@ -28,6 +28,7 @@ use coil_kernels::mirrored_wall::MirroredWallArgs;
 use coil_kernels::nozzle::{NozzleArgs, NozzleShiftArgs};
 use coil_kernels::shifting_sun2017::{ShiftArgs, ShiftingArgs};
 use coil_kernels::topology::{Periodic, Topology};
+use coil_kernels::velocity_gradient::GradientEstimate;
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, View};
 use coil_kernels::viscosity::hourglass_ganzenmuller2015::VelocityGradientArgs;
 use coil_kernels::viscosity::laplacian_morris1997::ShearViscosityArgs;
@@ -198,17 +199,24 @@ impl<R: Real> DeviceState<R> {
 }
 
 /// The PTX entry of a pass in precision `R`: the stem, then the physics variant and the
-/// topology where they are not empty, then `R` (e.g. `stress_cross_f32`). Names are few and
-/// fixed: each is built once and kept.
+/// topology where they are not empty, then `R` (e.g. `stress_cross_f32`).
 fn kernel<R: Real>(stem: &'static str, variant: &'static str, topology: &'static str) -> &'static str {
+    entry::<R>([stem, variant, "", topology])
+}
+
+/// The PTX entry named by `parts` (stem, physics variants, topology) that are not empty, then
+/// `R` (e.g. `stress_cross_renormalized_f32`). Names are few and fixed: each is built once and
+/// kept.
+fn entry<R: Real>(parts: [&'static str; 4]) -> &'static str {
     use std::collections::HashMap;
     use std::sync::{Mutex, OnceLock};
-    type Names = HashMap<[&'static str; 4], &'static str>;
+    type Names = HashMap<[&'static str; 5], &'static str>;
     static NAMES: OnceLock<Mutex<Names>> = OnceLock::new();
     let mut names = NAMES.get_or_init(Default::default).lock().unwrap_or_else(|e| e.into_inner());
-    names.entry([stem, variant, topology, R::NAME]).or_insert_with(|| {
-        let parts = [stem, variant, topology, R::NAME];
-        Box::leak(parts.iter().filter(|p| !p.is_empty()).copied().collect::<Vec<_>>().join("_").into_boxed_str())
+    let [stem, variant, detail, topology] = parts;
+    let key = [stem, variant, detail, topology, R::NAME];
+    names.entry(key).or_insert_with(|| {
+        Box::leak(key.iter().filter(|p| !p.is_empty()).copied().collect::<Vec<_>>().join("_").into_boxed_str())
     })
 }
 
@@ -242,8 +250,8 @@ impl<R: Real, T: Topology> Passes<R, T, Neighborhood<'static, T>> for GpuPasses<
     fn mirrored_wall(&mut self, args: MirroredWallArgs<'_, R, T>) {
         self.run(kernel::<R>("mirrored_wall", "", T::NAME), args);
     }
-    fn stress<Rh: Rheology<R>>(&mut self, args: StressArgs<'_, R, Rh, Neighborhood<'static, T>>) {
-        self.run(kernel::<R>("stress", Rh::NAME, T::NAME), args);
+    fn stress<Rh: Rheology<R>, G: GradientEstimate>(&mut self, args: StressArgs<'_, R, Rh, G, Neighborhood<'static, T>>) {
+        self.run(entry::<R>(["stress", Rh::NAME, G::NAME, T::NAME]), args);
     }
     fn shear_viscosity<Rh: Rheology<R>>(&mut self, args: ShearViscosityArgs<'_, R, Rh, Neighborhood<'static, T>>) {
         self.run(kernel::<R>("shear_viscosity", Rh::NAME, T::NAME), args);

@@ -7,7 +7,7 @@ use crate::simulation::particles::{vec3_view, HostParticles};
 use crate::simulation::RunState;
 use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::density::pressure;
-use coil_kernels::velocity_gradient::{rate_of_deformation, shear_rate, velocity_gradient};
+use coil_kernels::velocity_gradient::{rate_of_deformation, shear_rate, GradientEstimate};
 use coil_kernels::view::View;
 use coil_kernels::Real;
 use rayon::prelude::*;
@@ -31,8 +31,8 @@ pub struct Frame {
 }
 
 impl Frame {
-    /// Reads the fluid particles `host` of the run `run`, computing shear rate (Eq. 8, 2) and
-    /// viscosity (Eq. 3) with the kernels' own functions.
+    /// Reads the fluid particles `host` of the run `run`, computing shear rate (Eq. 8, 2, with the
+    /// run's velocity gradient) and viscosity (Eq. 3) with the kernels' own functions.
     pub fn capture<R: Real, M: Model<R>>(&mut self, run: &RunState<R, M>, host: &HostParticles<R>) {
         let p = &host.particles;
         let n = p.len();
@@ -46,7 +46,7 @@ impl Frame {
             if fluid.is_boundary(p.id[i]) {
                 return;
             }
-            let grad = velocity_gradient(i, &neighborhood, &velocity, &density, &fluid);
+            let grad = M::Gradient::velocity_gradient(i, &neighborhood, &velocity, &density, &fluid);
             *out = shear_rate(rate_of_deformation(grad)).to_f64() as f32;
         });
         self.position.clear();

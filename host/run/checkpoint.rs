@@ -41,7 +41,7 @@ pub const RESUMABLE: [&str; 3] = ["simulation.end_time_s", "simulation.time_step
 /// scene that agrees with the one it was taken from on each (array sections as a whole). A field
 /// added to the scene joins this list only if it changes the physics, and must then be left out
 /// of the serialized scene at its default, so that checkpoints taken before it existed resume.
-pub const PHYSICS: [&str; 28] = [
+pub const PHYSICS: [&str; 29] = [
     "material.rest_density_kg_m3",
     "material.sound_speed_m_s",
     "material.clamp_negative_pressure",
@@ -58,6 +58,7 @@ pub const PHYSICS: [&str; 28] = [
     "material.viscosity.cross_k_s",
     "material.viscosity.cross_n",
     "material.viscosity.hourglass_control",
+    "material.viscosity.velocity_gradient",
     "domain.min_m",
     "domain.max_m",
     "domain.periodic",

@@ -232,6 +232,31 @@ pub struct Viscosity {
     /// cannot see. 0 (the default) is the paper's operator alone.
     #[serde(default)]
     pub hourglass_control: f64,
+    /// How the paper's operator estimates the velocity gradient. Left out of the resolved scene
+    /// at its default, so that checkpoints taken before the field existed keep their
+    /// fingerprint.
+    #[serde(default, skip_serializing_if = "VelocityGradient::is_sph")]
+    pub velocity_gradient: VelocityGradient,
+}
+
+/// The velocity gradient the paper's operator reads (Eq. (8), then (2) and (9)).
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum VelocityGradient {
+    /// Eq. (8) as printed: exact for a linear field only where the support is full, so about
+    /// half of the gradient on a free surface.
+    #[default]
+    Sph,
+    /// Eq. (8) times the inverse of its moment matrix (Bonet and Lok 1999): exact for a linear
+    /// field wherever the neighbors span three dimensions, so a thin thread carries the
+    /// viscous stress it should.
+    Renormalized,
+}
+
+impl VelocityGradient {
+    fn is_sph(&self) -> bool {
+        *self == VelocityGradient::Sph
+    }
 }
 
 fn one() -> f64 {

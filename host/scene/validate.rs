@@ -1,7 +1,9 @@
 //! What a scene's values must mean, checked once at load: one validator per section, each
 //! refusing a value with the field named as `--set` spells it.
 
-use super::{short, Boundary, Domain, Material, Nozzle, NozzleMotion, Output, Scene, SceneError, ViscosityOperator};
+use super::{
+    short, Boundary, Domain, Material, Nozzle, NozzleMotion, Output, Scene, SceneError, VelocityGradient, ViscosityOperator,
+};
 use super::{Precision, SimulationSettings, MAX_HOURGLASS_CONTROL, MAX_PARTICLE_SHIFTING};
 use crate::simulation::time_step::{Limit, StabilityBound};
 use toml::Value;
@@ -202,6 +204,13 @@ impl Check<'_> {
                 "material.viscosity.hourglass_control",
                 "controls the paper's operator (operator = \"stress\"); the Laplacian operators have no odd-even mode to control"
                     .into(),
+            );
+        }
+        if v.velocity_gradient != VelocityGradient::Sph && (v.operator != ViscosityOperator::Stress || v.hourglass_control > 0.0)
+        {
+            return self.fail(
+                "material.viscosity.velocity_gradient",
+                "\"renormalized\" applies to the paper's operator (operator = \"stress\") without hourglass control".into(),
             );
         }
         Ok(())

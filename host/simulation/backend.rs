@@ -17,6 +17,7 @@ use coil_kernels::mirrored_wall::MirroredWallArgs;
 use coil_kernels::nozzle::{NozzleArgs, NozzleShiftArgs};
 use coil_kernels::shifting_sun2017::{ShiftArgs, ShiftingArgs};
 use coil_kernels::topology::{Periodic, Topology};
+use coil_kernels::velocity_gradient::GradientEstimate;
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::viscosity::hourglass_ganzenmuller2015::VelocityGradientArgs;
 use coil_kernels::viscosity::laplacian_morris1997::ShearViscosityArgs;
@@ -32,7 +33,7 @@ pub trait Passes<R: Real, T: Topology, N: Neighbors> {
     fn continuity<K: DensityKernel>(&mut self, args: ContinuityArgs<'_, R, N>);
     fn density_integration(&mut self, args: DensityIntegrationArgs<'_, R>);
     fn mirrored_wall(&mut self, args: MirroredWallArgs<'_, R, T>);
-    fn stress<Rh: Rheology<R>>(&mut self, args: StressArgs<'_, R, Rh, N>);
+    fn stress<Rh: Rheology<R>, G: GradientEstimate>(&mut self, args: StressArgs<'_, R, Rh, G, N>);
     fn shear_viscosity<Rh: Rheology<R>>(&mut self, args: ShearViscosityArgs<'_, R, Rh, N>);
     fn velocity_gradient<Rh: Rheology<R>>(&mut self, args: VelocityGradientArgs<'_, R, Rh, N>);
     fn acceleration<Op: ViscousOperator<R>>(&mut self, args: AccelerationArgs<'_, R, Op, N>);

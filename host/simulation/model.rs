@@ -1,17 +1,20 @@
 //! The physics variant of a run, chosen once from the scene: the paper's stress operator with a
-//! Newtonian or Cross rheology, without or with hourglass control, Müller's Laplacian
+//! Newtonian or Cross rheology, Eq. (8) as printed or renormalized, without or with hourglass
+//! control, Müller's Laplacian
 //! (Newtonian), or Morris's operator with a constant viscosity or a shear-thinning one per
 //! particle. Each is a type, so the CPU loops and the GPU kernels of a run contain only the
 //! physics it uses.
 
-use crate::scene::{Precision, Scene, Viscosity, ViscosityOperator};
+use crate::scene::{Precision, Scene, VelocityGradient, Viscosity, ViscosityOperator};
 use crate::simulation::backend::Passes;
 pub use crate::simulation::particles::ModelFields;
 use coil_kernels::acceleration::AccelerationArgs;
 use coil_kernels::cell_grid::{Neighborhood, Neighbors};
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
+use coil_kernels::renormalization_bonet1999::Renormalized;
 use coil_kernels::topology::{Open, Topology};
+use coil_kernels::velocity_gradient::{GradientEstimate, KernelSum};
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::viscosity::hourglass_ganzenmuller2015::{HourglassControlledStress, VelocityGradientArgs};
 use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
@@ -30,6 +33,8 @@ pub trait Model<R: Real>: Copy + Send + Sync + 'static {
     /// Eq. (10) bound.
     type Law: Rheology<R>;
     fn law(&self) -> Self::Law;
+    /// How the run estimates velocity gradients (its own, and the shear rate of output frames).
+    type Gradient: GradientEstimate;
     /// Velocity gradient and stress (when used), then accelerations, for all particles of
     /// `state`, run by `backend`, visiting neighbors through `N`.
     fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, state: ParticleState<'_, R, N>);
@@ -88,8 +93,14 @@ pub fn with_model<R: Real, W: WithModel>(scene: &Scene, work: W) -> W::Output {
         (ViscosityOperator::Laplacian, _) => work.with::<R, _>(LaplacianModel(Newtonian { nu0 })),
         (ViscosityOperator::Morris, true) => work.with::<R, _>(MorrisModel(Newtonian { nu0 })),
         (ViscosityOperator::Morris, false) => work.with::<R, _>(ShearThinningMorrisModel(cross_law(v))),
-        (ViscosityOperator::Stress, true) => work.with::<R, _>(StressModel(Newtonian { nu0 })),
-        (ViscosityOperator::Stress, false) => work.with::<R, _>(StressModel(cross_law(v))),
+        (ViscosityOperator::Stress, true) => match v.velocity_gradient {
+            VelocityGradient::Sph => work.with::<R, _>(StressModel(Newtonian { nu0 }, KernelSum)),
+            VelocityGradient::Renormalized => work.with::<R, _>(StressModel(Newtonian { nu0 }, Renormalized)),
+        },
+        (ViscosityOperator::Stress, false) => match v.velocity_gradient {
+            VelocityGradient::Sph => work.with::<R, _>(StressModel(cross_law(v), KernelSum)),
+            VelocityGradient::Renormalized => work.with::<R, _>(StressModel(cross_law(v), Renormalized)),
+        },
     }
 }
 
@@ -111,9 +122,10 @@ pub fn cross_law<R: Real>(v: &Viscosity) -> Cross<R> {
     }
 }
 
-/// The paper's operator, Eq. (8), (2), (9), with rheology `Rh`.
+/// The paper's operator, Eq. (8), (2), (9), with rheology `Rh` and the velocity gradient
+/// estimated by `G` (Eq. (8) as printed, or renormalized).
 #[derive(Clone, Copy, Debug)]
-pub struct StressModel<Rh>(pub Rh);
+pub struct StressModel<Rh, G>(pub Rh, pub G);
 
 /// The paper's operator with hourglass control (`coil_kernels::hourglass_control`) of weight
 /// `coefficient`, with rheology `Rh`.
@@ -136,17 +148,19 @@ pub struct MorrisModel<R>(pub Newtonian<R>);
 #[derive(Clone, Copy, Debug)]
 pub struct ShearThinningMorrisModel<Rh>(pub Rh);
 
-impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for StressModel<Rh> {
+impl<R: Real, Rh: Rheology<R> + 'static, G: GradientEstimate> Model<R> for StressModel<Rh, G> {
     const FIELDS: ModelFields =
         ModelFields { stress: true, viscosity: false, velocity_gradient: false, density_rate: false, shift: false };
     type Law = Rh;
     fn law(&self) -> Self::Law {
         self.0
     }
+    type Gradient = G;
     fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
         let stress = s.stress.expect("the stress operator allocates stress");
         backend.stress(StressArgs {
             neighborhood: s.neighborhood,
+            gradient: self.1,
             fluid: s.fluid,
             rheology: self.0,
             velocity: s.velocity,
@@ -164,6 +178,7 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for HourglassStressModel<Rh, R
     fn law(&self) -> Self::Law {
         self.rheology
     }
+    type Gradient = KernelSum;
     fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
         let gradient = s.velocity_gradient.expect("hourglass control allocates the velocity gradient");
         let viscosity = s.viscosity.expect("hourglass control allocates viscosity");
@@ -192,6 +207,7 @@ impl<R: Real> Model<R> for LaplacianModel<R> {
     fn law(&self) -> Self::Law {
         self.0
     }
+    type Gradient = KernelSum;
     fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
         let mu0 = self.0.nu0 * s.fluid.rest_density;
         backend.acceleration(s.acceleration_args(VelocityLaplacian { mu0, velocity: s.velocity }));
@@ -205,6 +221,7 @@ impl<R: Real> Model<R> for MorrisModel<R> {
     fn law(&self) -> Self::Law {
         self.0
     }
+    type Gradient = KernelSum;
     fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
         backend.acceleration(s.acceleration_args(MorrisViscosity { velocity: s.velocity, viscosity: self.0 }));
     }
@@ -217,6 +234,7 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for ShearThinningMorrisModel<R
     fn law(&self) -> Self::Law {
         self.0
     }
+    type Gradient = KernelSum;
     fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
         let viscosity = s.viscosity.expect("the shear-thinning Morris operator allocates viscosity");
         backend.shear_viscosity(ShearViscosityArgs {

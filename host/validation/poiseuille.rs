@@ -5,7 +5,7 @@
 
 use super::scene_word;
 use super::snapshot::snapshots;
-use crate::scene::{DensityKernelKind, Precision, Scene, ViscosityOperator, ViscousVelocity, Walls};
+use crate::scene::{DensityKernelKind, Precision, Scene, VelocityGradient, ViscosityOperator, ViscousVelocity, Walls};
 use std::f64::consts::PI;
 
 /// Morris et al. 1997's channel: L = 1 mm, nu = 1e-6 m^2/s, F = 2e-4 m/s^2, rho0 = 1000
@@ -34,6 +34,8 @@ pub struct Channel {
     pub hourglass_control: f64,
     /// Which velocity the viscous terms read.
     pub viscous_velocity: ViscousVelocity,
+    /// The paper's operator's velocity gradient.
+    pub velocity_gradient: VelocityGradient,
 }
 
 /// The Cross model, Eq. (3), by its constants.
@@ -69,6 +71,7 @@ impl Channel {
             density_kernel: DensityKernelKind::Poly6,
             hourglass_control: 0.0,
             viscous_velocity: ViscousVelocity::FullStep,
+            velocity_gradient: VelocityGradient::Sph,
         }
     }
 
@@ -89,6 +92,7 @@ impl Channel {
         let (l, w) = (self.gap_m, 6.0 * s);
         let (operator, precision, walls) = (scene_word(self.operator), scene_word(self.precision), scene_word(self.walls));
         let (density_kernel, viscous_velocity) = (scene_word(self.density_kernel), scene_word(self.viscous_velocity));
+        let velocity_gradient = scene_word(self.velocity_gradient);
         let cross = self
             .cross
             .map(|c| format!("nu_inf_m2_s = {:e}\ncross_k_s = {:e}\ncross_n = {:e}\n", c.nu_inf_m2_s, c.k_s, c.n))
@@ -107,6 +111,7 @@ density_kernel = "{density_kernel}"
 operator = "{operator}"
 nu0_m2_s = {nu0:e}
 hourglass_control = {hg:e}
+velocity_gradient = "{velocity_gradient}"
 {cross}
 [domain]
 min_m = [0.0, {ylo:e}, 0.0]

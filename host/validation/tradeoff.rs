@@ -7,7 +7,7 @@
 use super::poiseuille::{Channel, CrossLaw};
 use super::{cross_poiseuille_in, operator_label, startup_poiseuille_in, HOURGLASS_CONTROL};
 use crate::output::plot::{Axis, Chart, Curve, Line, PALETTE};
-use crate::scene::{DensityKernelKind, Precision, ViscosityOperator, ViscousVelocity, Walls};
+use crate::scene::{DensityKernelKind, Precision, VelocityGradient, ViscosityOperator, ViscousVelocity, Walls};
 use crate::statistics::Sorted;
 use std::time::Instant;
 
@@ -68,6 +68,14 @@ pub fn trials(quick: bool) -> Vec<Trial> {
     for &across in resolutions {
         let setting = format!("{across} across, paper's operator, hourglass control {HOURGLASS_CONTROL}");
         add("start-up", "hourglass control", setting, controlled(across));
+    }
+    let renormalized = |across| Channel {
+        velocity_gradient: VelocityGradient::Renormalized,
+        ..Channel::morris(across, ViscosityOperator::Stress)
+    };
+    for &across in resolutions {
+        let setting = format!("{across} across, paper's operator, renormalized gradient");
+        add("start-up", "velocity gradient", setting, renormalized(across));
     }
     let safety: &[f64] = if quick { &[0.5, 8.0] } else { &[0.5, 0.25, 2.0, 4.0, 8.0] };
     for &f in safety {
@@ -133,6 +141,13 @@ pub fn trials(quick: bool) -> Vec<Trial> {
             add("Cross", "operator", format!("{across} across, Morris's operator"), morris);
             let setting = format!("{across} across, hourglass control {HOURGLASS_CONTROL}");
             add("Cross", "hourglass control", setting, Channel { hourglass_control: HOURGLASS_CONTROL, ..cross(across) });
+            let setting = format!("{across} across, renormalized gradient");
+            add(
+                "Cross",
+                "velocity gradient",
+                setting,
+                Channel { velocity_gradient: VelocityGradient::Renormalized, ..cross(across) },
+            );
         }
         add("Cross", "precision", "f32".into(), Channel { precision: Precision::F32, ..cross(10) });
         let c = 0.1 * cross(10).sound_speed_m_s;

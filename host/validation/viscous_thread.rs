@@ -5,7 +5,7 @@
 //! 3 nu.
 
 use super::snapshot::snapshots;
-use crate::scene::{DensityEquation, Scene, ViscosityOperator};
+use crate::scene::{DensityEquation, Scene, VelocityGradient, ViscosityOperator};
 
 /// The shipped Newtonian jet.
 const NEWTONIAN_JET: &str = include_str!("../../scenes/newtonian_jet.toml");
@@ -125,6 +125,8 @@ pub struct Treatment {
     pub clamp_negative_pressure: bool,
     /// `simulation.particle_shifting`'s coefficient, 0 for none.
     pub particle_shifting: f64,
+    /// The paper's operator's velocity gradient (the other operators have their own).
+    pub velocity_gradient: VelocityGradient,
 }
 
 impl Treatment {
@@ -132,11 +134,40 @@ impl Treatment {
     /// clamped and as printed, the continuity equation, and the continuity equation with
     /// particle shifting (A = 2).
     pub const COMPARED: [Treatment; 4] = [
-        Treatment { density_equation: DensityEquation::Summation, clamp_negative_pressure: true, particle_shifting: 0.0 },
-        Treatment { density_equation: DensityEquation::Summation, clamp_negative_pressure: false, particle_shifting: 0.0 },
-        Treatment { density_equation: DensityEquation::Continuity, clamp_negative_pressure: false, particle_shifting: 0.0 },
-        Treatment { density_equation: DensityEquation::Continuity, clamp_negative_pressure: false, particle_shifting: 2.0 },
+        Treatment {
+            density_equation: DensityEquation::Summation,
+            clamp_negative_pressure: true,
+            particle_shifting: 0.0,
+            velocity_gradient: VelocityGradient::Sph,
+        },
+        Treatment {
+            density_equation: DensityEquation::Summation,
+            clamp_negative_pressure: false,
+            particle_shifting: 0.0,
+            velocity_gradient: VelocityGradient::Sph,
+        },
+        Treatment {
+            density_equation: DensityEquation::Continuity,
+            clamp_negative_pressure: false,
+            particle_shifting: 0.0,
+            velocity_gradient: VelocityGradient::Sph,
+        },
+        Treatment {
+            density_equation: DensityEquation::Continuity,
+            clamp_negative_pressure: false,
+            particle_shifting: 2.0,
+            velocity_gradient: VelocityGradient::Sph,
+        },
     ];
+
+    /// The paper's operator with the continuity equation, particle shifting (A = 2) and the
+    /// renormalized velocity gradient: the formulation the shipped jets use.
+    pub const RENORMALIZED: Treatment = Treatment {
+        density_equation: DensityEquation::Continuity,
+        clamp_negative_pressure: false,
+        particle_shifting: 2.0,
+        velocity_gradient: VelocityGradient::Renormalized,
+    };
 
     /// How a case names its density and pressure, and how a plot's file name does.
     fn density_names(&self) -> (&'static str, &'static str) {
@@ -150,22 +181,26 @@ impl Treatment {
 
     /// How a case names it.
     pub fn name(&self) -> String {
-        let density = self.density_names().0;
+        let mut name = self.density_names().0.to_string();
         if self.particle_shifting > 0.0 {
-            format!("{density}, particle shifting A = {}", self.particle_shifting)
-        } else {
-            density.into()
+            name += &format!(", particle shifting A = {}", self.particle_shifting);
         }
+        if self.velocity_gradient == VelocityGradient::Renormalized {
+            name += ", renormalized gradient";
+        }
+        name
     }
 
     /// How a plot's file name names it.
     pub fn word(&self) -> String {
-        let density = self.density_names().1;
+        let mut word = self.density_names().1.to_string();
         if self.particle_shifting > 0.0 {
-            format!("{density}_shifted")
-        } else {
-            density.into()
+            word += "_shifted";
         }
+        if self.velocity_gradient == VelocityGradient::Renormalized {
+            word += "_renormalized";
+        }
+        word
     }
 }
 
@@ -188,6 +223,7 @@ pub fn thread_scene(
     material.clamp_negative_pressure = treatment.clamp_negative_pressure;
     material.density_equation = treatment.density_equation;
     material.viscosity.operator = op;
+    material.viscosity.velocity_gradient = treatment.velocity_gradient;
     scene.boundaries.clear();
     let inlet = &mut scene.inlets[0];
     inlet.position_m = [0.0, FALL_M, 0.0];

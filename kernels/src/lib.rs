@@ -44,6 +44,7 @@ pub mod mirrored_wall;
 pub mod neighbor_list;
 pub mod nozzle;
 pub mod real;
+pub mod renormalization_bonet1999;
 pub mod shifting_sun2017;
 pub mod smoothing;
 pub mod topology;

@@ -25,8 +25,10 @@ use crate::fluid_cells::{holds_fluid_pass, near_fluid_pass, HoldsFluidArgs, Near
 use crate::leapfrog::{leapfrog_pass, LeapfrogArgs};
 use crate::mirrored_wall::{mirrored_wall_pass, MirroredWallArgs};
 use crate::nozzle::{nozzle_pass, nozzle_shift_pass, NozzleArgs, NozzleShiftArgs};
+use crate::renormalization_bonet1999::Renormalized;
 use crate::shifting_sun2017::{shift_pass, shifting_pass, ShiftArgs, ShiftingArgs};
 use crate::topology::{Open, Periodic};
+use crate::velocity_gradient::KernelSum;
 use crate::view::{View, ViewMut};
 use crate::viscosity::hourglass_ganzenmuller2015::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
 use crate::viscosity::laplacian_morris1997::MorrisViscosity;
@@ -184,17 +186,51 @@ per_topology_kernels!(mirrored_wall_f64, mirrored_wall_periodic_f64, MirroredWal
 per_neighborhood_kernels!(
     stress_newtonian_f32,
     stress_newtonian_periodic_f32,
-    StressArgs<f32, Newtonian<f32>>,
-    stress_pass<f32, Newtonian<f32>>
+    StressArgs<f32, Newtonian<f32>, KernelSum>,
+    stress_pass<f32, Newtonian<f32>, KernelSum>
 );
 per_neighborhood_kernels!(
     stress_newtonian_f64,
     stress_newtonian_periodic_f64,
-    StressArgs<f64, Newtonian<f64>>,
-    stress_pass<f64, Newtonian<f64>>
+    StressArgs<f64, Newtonian<f64>, KernelSum>,
+    stress_pass<f64, Newtonian<f64>, KernelSum>
 );
-per_neighborhood_kernels!(stress_cross_f32, stress_cross_periodic_f32, StressArgs<f32, Cross<f32>>, stress_pass<f32, Cross<f32>>);
-per_neighborhood_kernels!(stress_cross_f64, stress_cross_periodic_f64, StressArgs<f64, Cross<f64>>, stress_pass<f64, Cross<f64>>);
+per_neighborhood_kernels!(
+    stress_cross_f32,
+    stress_cross_periodic_f32,
+    StressArgs<f32, Cross<f32>, KernelSum>,
+    stress_pass<f32, Cross<f32>, KernelSum>
+);
+per_neighborhood_kernels!(
+    stress_cross_f64,
+    stress_cross_periodic_f64,
+    StressArgs<f64, Cross<f64>, KernelSum>,
+    stress_pass<f64, Cross<f64>, KernelSum>
+);
+per_neighborhood_kernels!(
+    stress_newtonian_renormalized_f32,
+    stress_newtonian_renormalized_periodic_f32,
+    StressArgs<f32, Newtonian<f32>, Renormalized>,
+    stress_pass<f32, Newtonian<f32>, Renormalized>
+);
+per_neighborhood_kernels!(
+    stress_newtonian_renormalized_f64,
+    stress_newtonian_renormalized_periodic_f64,
+    StressArgs<f64, Newtonian<f64>, Renormalized>,
+    stress_pass<f64, Newtonian<f64>, Renormalized>
+);
+per_neighborhood_kernels!(
+    stress_cross_renormalized_f32,
+    stress_cross_renormalized_periodic_f32,
+    StressArgs<f32, Cross<f32>, Renormalized>,
+    stress_pass<f32, Cross<f32>, Renormalized>
+);
+per_neighborhood_kernels!(
+    stress_cross_renormalized_f64,
+    stress_cross_renormalized_periodic_f64,
+    StressArgs<f64, Cross<f64>, Renormalized>,
+    stress_pass<f64, Cross<f64>, Renormalized>
+);
 per_neighborhood_kernels!(
     acceleration_stress_f32,
     acceleration_stress_periodic_f32,
@@ -476,6 +512,14 @@ pub const ENTRIES: &[(&str, Emulated)] = {
         stress_cross_periodic_f32,
         stress_cross_f64,
         stress_cross_periodic_f64,
+        stress_newtonian_renormalized_f32,
+        stress_newtonian_renormalized_periodic_f32,
+        stress_newtonian_renormalized_f64,
+        stress_newtonian_renormalized_periodic_f64,
+        stress_cross_renormalized_f32,
+        stress_cross_renormalized_periodic_f32,
+        stress_cross_renormalized_f64,
+        stress_cross_renormalized_periodic_f64,
         acceleration_stress_f32,
         acceleration_stress_periodic_f32,
         acceleration_stress_f64,

@@ -125,6 +125,43 @@ impl<R: Real> Mat3<R> {
         )
     }
 
+    /// `M^-1`, or `None` when `M` is too close to singular: |det M| below 1e-3 of the product
+    /// of its row norms (1 for a rotation; the moment matrix of a particle with its neighbors
+    /// on one line or one plane has 0).
+    #[inline(always)]
+    pub fn inverse(self) -> Option<Self> {
+        let m = self.m;
+        let c00 = m[1][1] * m[2][2] - m[1][2] * m[2][1];
+        let c01 = m[1][2] * m[2][0] - m[1][0] * m[2][2];
+        let c02 = m[1][0] * m[2][1] - m[1][1] * m[2][0];
+        let det = m[0][0] * c00 + m[0][1] * c01 + m[0][2] * c02;
+        let norm = |r: [R; 3]| (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+        if !(det.abs() > R::from_f64(1e-3) * norm(m[0]) * norm(m[1]) * norm(m[2])) {
+            return None;
+        }
+        let inv = R::ONE / det;
+        Some(Self {
+            m: [
+                [c00 * inv, (m[0][2] * m[2][1] - m[0][1] * m[2][2]) * inv, (m[0][1] * m[1][2] - m[0][2] * m[1][1]) * inv],
+                [c01 * inv, (m[0][0] * m[2][2] - m[0][2] * m[2][0]) * inv, (m[0][2] * m[1][0] - m[0][0] * m[1][2]) * inv],
+                [c02 * inv, (m[0][1] * m[2][0] - m[0][0] * m[2][1]) * inv, (m[0][0] * m[1][1] - m[0][1] * m[1][0]) * inv],
+            ],
+        })
+    }
+
+    /// The product `self · o`.
+    #[inline(always)]
+    pub fn matmul(self, o: Self) -> Self {
+        let (a, b) = (self.m, o.m);
+        let mut m = [[R::ZERO; 3]; 3];
+        for (r, row) in m.iter_mut().enumerate() {
+            for (c, cell) in row.iter_mut().enumerate() {
+                *cell = a[r][0] * b[0][c] + a[r][1] * b[1][c] + a[r][2] * b[2][c];
+            }
+        }
+        Self { m }
+    }
+
     /// The product `M^T · v`.
     #[inline(always)]
     pub fn transpose_dot(self, v: Vec3<R>) -> Vec3<R> {

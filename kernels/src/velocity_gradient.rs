@@ -32,6 +32,38 @@ pub fn velocity_gradient<R: Real, N: Neighbors>(
     grad.scaled(fluid.mass)
 }
 
+/// How a pass estimates the velocity gradient, fixed for a run.
+pub trait GradientEstimate: Copy + Send + Sync + 'static {
+    /// Empty for Eq. (8) as printed; otherwise the estimate's part of PTX entry names.
+    const NAME: &'static str;
+    /// The velocity gradient of particle `i` (1/s), `m[a][b] = d v_a / d x_b`.
+    fn velocity_gradient<R: Real, N: Neighbors>(
+        i: usize,
+        neighborhood: &N,
+        velocity: &Vec3View<R>,
+        density: &View<R>,
+        fluid: &Fluid<R>,
+    ) -> Mat3<R>;
+}
+
+/// Eq. (8) as printed: [`velocity_gradient`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct KernelSum;
+
+impl GradientEstimate for KernelSum {
+    const NAME: &'static str = "";
+    #[inline(always)]
+    fn velocity_gradient<R: Real, N: Neighbors>(
+        i: usize,
+        neighborhood: &N,
+        velocity: &Vec3View<R>,
+        density: &View<R>,
+        fluid: &Fluid<R>,
+    ) -> Mat3<R> {
+        velocity_gradient(i, neighborhood, velocity, density, fluid)
+    }
+}
+
 /// Rate-of-deformation tensor D = grad v + grad v^T (1/s), Sec. II.
 #[inline(always)]
 pub fn rate_of_deformation<R: Real>(velocity_gradient: Mat3<R>) -> SymTensor<R> {

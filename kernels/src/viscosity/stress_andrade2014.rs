@@ -10,7 +10,7 @@ use crate::real::Real;
 use crate::smoothing::SmoothingKernels;
 use crate::topology::Open;
 use crate::vec3::{SymTensor, Vec3};
-use crate::velocity_gradient::{rate_of_deformation, shear_rate, velocity_gradient};
+use crate::velocity_gradient::{rate_of_deformation, shear_rate, GradientEstimate};
 use crate::view::{SymTensorView, SymTensorViewMut, Vec3View, View};
 
 /// Shear stress tau = rho nu(D) D (Pa), Eq. (2), with nu from `rheology` (Eq. (3)).
@@ -19,11 +19,13 @@ pub fn stress<R: Real, Rh: Rheology<R>>(deformation: SymTensor<R>, density: R, r
     deformation.scaled(density * rheology.viscosity(shear_rate(deformation)))
 }
 
-/// Arguments of the velocity-gradient-and-stress pass.
+/// Arguments of the velocity-gradient-and-stress pass, with the velocity gradient estimated
+/// by `G` (Eq. (8) as printed: `KernelSum`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
-pub struct StressArgs<'a, R, Rh, N = Neighborhood<'a, Open>> {
+pub struct StressArgs<'a, R, Rh, G, N = Neighborhood<'a, Open>> {
     pub neighborhood: N,
+    pub gradient: G,
     pub fluid: Fluid<R>,
     pub rheology: Rh,
     /// Velocity the viscous terms read (m/s): see `leapfrog`.
@@ -34,8 +36,8 @@ pub struct StressArgs<'a, R, Rh, N = Neighborhood<'a, Open>> {
 
 /// The stress pass for particle `i` (boundary particles included: Eq. (9) reads their stress).
 #[inline(always)]
-pub fn stress_pass<R: Real, Rh: Rheology<R>, N: Neighbors>(i: usize, a: &StressArgs<R, Rh, N>) {
-    let grad = velocity_gradient(i, &a.neighborhood, &a.velocity, &a.density, &a.fluid);
+pub fn stress_pass<R: Real, Rh: Rheology<R>, G: GradientEstimate, N: Neighbors>(i: usize, a: &StressArgs<R, Rh, G, N>) {
+    let grad = G::velocity_gradient(i, &a.neighborhood, &a.velocity, &a.density, &a.fluid);
     let tau = stress(rate_of_deformation(grad), a.density.at(i), &a.rheology);
     // SAFETY: invocation i owns entry i.
     unsafe {
