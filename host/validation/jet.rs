@@ -4,7 +4,7 @@
 //! a few diameters it stays straight.
 
 use super::snapshot::snapshots;
-use crate::scene::{Scene, ViscosityOperator};
+use crate::scene::{Scene, VelocityGradient, ViscosityOperator};
 use crate::validation::jet_axis::JetAxis;
 
 /// The shipped Newtonian jet.
@@ -30,6 +30,10 @@ pub fn jet_scene(
     scene.domain.max_m[1] = height + 0.03;
     scene.material.viscosity.operator = op;
     scene.material.viscosity.hourglass_control = hourglass_control;
+    if op != ViscosityOperator::Stress || hourglass_control > 0.0 {
+        // Only the paper's operator without hourglass control takes the renormalized gradient.
+        scene.material.viscosity.velocity_gradient = VelocityGradient::Sph;
+    }
     scene.simulation.end_time_s = end_time_s;
     scene.name = format!("jet, H/D = {height_over_d}");
     Ok((axis, scene))
