@@ -1,8 +1,7 @@
 //! The physics variant of a run, chosen once from the scene: the paper's stress operator with a
 //! Newtonian or Cross rheology, Eq. (8) as printed or renormalized, without or with hourglass
-//! control, Müller's Laplacian
-//! (Newtonian), or Morris's operator with a constant viscosity or a shear-thinning one per
-//! particle. Each is a type, so the CPU loops and the GPU kernels of a run contain only the
+//! control, Müller's Laplacian (Newtonian), or Morris's operator with a constant viscosity or a
+//! shear-thinning one per particle. Each is a type, so the CPU loops and the GPU kernels of a run contain only the
 //! physics it uses.
 
 use crate::scene::{Precision, Scene, VelocityGradient, Viscosity, ViscosityOperator};

@@ -1,4 +1,4 @@
-//! Eq. (8) renormalised to be exact for linear velocity fields: Bonet and Lok, "Variational and
+//! Eq. (8) renormalized to be exact for linear velocity fields: Bonet and Lok, "Variational and
 //! momentum preservation aspects of Smooth Particle Hydrodynamic formulations" (CMAME 1999).
 //! Where a free surface cuts a particle's support, Eq. (8) sees only part of the neighbors a
 //! gradient needs (about half on a flat surface), so a stretching thread, which is mostly
