@@ -205,9 +205,11 @@ fn the_jet_axis_is_taken_from_the_nozzle_and_the_surface_below_it() {
 /// runs: the shipped jet from H/D = 3 to 0.1 s, every 0.02 s. A run writes each frame at the
 /// first step at or past its time, up to one step (8 us) late, where validate shortens that
 /// step to land on it; the axis moves at most a few D/s (the largest swing, 0.1 D in 0.02 s,
-/// is 5 D/s), so the two may differ by 5 D/s x 8 us = 4e-5 D, plus the six decimals printed:
-/// 1e-4 D is allowed (measured: 6e-6). A scene whose jet has no axis to measure is refused with
-/// its file, field and reason.
+/// is 5 D/s), so the two may differ by 5 D/s x 8 us = 4e-5 D, plus the six decimals printed.
+/// The shortened steps also change the run that follows: with the shipped jet's continuity
+/// density and shifting the two runs drift apart by 2e-4 D by 0.1 s (measured; 6e-6 with the
+/// paper's formulation), so 5e-4 D is allowed, 200 times below the 0.1 D the jet cases judge.
+/// A scene whose jet has no axis to measure is refused with its file, field and reason.
 #[test]
 fn coil_axis_measures_in_the_frames_what_validate_measures_as_the_jet_runs() {
     use coil::validation::jet::axis_offsets;
@@ -246,7 +248,7 @@ fn coil_axis_measures_in_the_frames_what_validate_measures_as_the_jet_runs() {
     assert!(expected.len() >= 3, "fluid must reach the slab by 0.06 s: {expected:?}");
     assert_eq!(measured.len(), expected.len(), "{printed}\nagainst {expected:?}");
     for (m, e) in measured.iter().zip(&expected) {
-        assert!((m[0] - e[0]).abs() < 1e-5 && (m[1] - e[1]).abs() <= 1e-4, "{printed}\nagainst {expected:?}");
+        assert!((m[0] - e[0]).abs() < 1e-5 && (m[1] - e[1]).abs() <= 5e-4, "{printed}\nagainst {expected:?}");
     }
     let largest = expected.iter().map(|p| p[1]).fold(0.0, f64::max);
     let printed_largest: f64 = printed
@@ -255,7 +257,7 @@ fn coil_axis_measures_in_the_frames_what_validate_measures_as_the_jet_runs() {
         .and_then(|l| l.split_whitespace().next())
         .and_then(|o| o.parse().ok())
         .unwrap_or_else(|| panic!("no largest offset in {printed}"));
-    assert!((printed_largest - largest).abs() <= 1e-4, "{printed}\nagainst {largest}");
+    assert!((printed_largest - largest).abs() <= 5e-4, "{printed}\nagainst {largest}");
 
     // Runs the axis cannot be read from: a moving nozzle, and frames written as PLY only.
     for (name, set, reason) in [
