@@ -7,8 +7,8 @@
 use crate::cell_grid::Neighbors;
 use crate::fluid::Fluid;
 use crate::real::Real;
-use crate::vec3::{Mat3, Vec3};
-use crate::velocity_gradient::GradientEstimate;
+use crate::vec3::Mat3;
+use crate::velocity_gradient::{kernel_sums, GradientEstimate};
 use crate::view::{Vec3View, View};
 
 /// grad v_i = [sum_j V_j (v_j - v_i) ⊗ grad_i W_ij] · L_i^-1, with the moment matrix
@@ -28,24 +28,12 @@ impl GradientEstimate for Renormalized {
         density: &View<R>,
         fluid: &Fluid<R>,
     ) -> Mat3<R> {
-        if !neighborhood.near_fluid(i) {
-            return Mat3::zero();
-        }
-        let [vx, vy, vz] = velocity.at(i);
-        let vi = Vec3::new(vx, vy, vz);
-        let mut grad = Mat3::zero();
-        let mut moment = Mat3::zero();
-        neighborhood.for_each_neighbor(i, fluid.kernels.h2, |j, r_ij, r2| {
-            let [x, y, z] = velocity.at(j);
-            let volume_over_mass = R::ONE / density.at(j);
-            let grad_w = fluid.kernels.spiky_gradient(r_ij, r2);
-            grad.add_outer((Vec3::new(x, y, z) - vi) * volume_over_mass, grad_w);
-            moment.add_outer(-r_ij * volume_over_mass, grad_w);
-        });
-        let grad = grad.scaled(fluid.mass);
-        match moment.scaled(fluid.mass).inverse() {
-            Some(inverse) => grad.matmul(inverse),
-            None => grad,
+        match kernel_sums::<R, N, true>(i, neighborhood, velocity, density, fluid) {
+            Some((grad, moment)) => match moment.inverse() {
+                Some(inverse) => grad.matmul(inverse),
+                None => grad,
+            },
+            None => Mat3::zero(),
         }
     }
 }

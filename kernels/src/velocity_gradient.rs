@@ -18,18 +18,40 @@ pub fn velocity_gradient<R: Real, N: Neighbors>(
     density: &View<R>,
     fluid: &Fluid<R>,
 ) -> Mat3<R> {
+    match kernel_sums::<R, N, false>(i, neighborhood, velocity, density, fluid) {
+        Some((grad, _)) => grad,
+        None => Mat3::zero(),
+    }
+}
+
+/// Eq. (8)'s sum and, with `MOMENT`, its moment matrix sum_j (m_j / rho_j) (x_j - x_i) ⊗
+/// grad_i W(x_ij) (dimensionless; the identity inside a lattice), in one neighbor loop. `None`
+/// away from fluid, where every term is zero.
+#[inline(always)]
+pub(crate) fn kernel_sums<R: Real, N: Neighbors, const MOMENT: bool>(
+    i: usize,
+    neighborhood: &N,
+    velocity: &Vec3View<R>,
+    density: &View<R>,
+    fluid: &Fluid<R>,
+) -> Option<(Mat3<R>, Mat3<R>)> {
     if !neighborhood.near_fluid(i) {
-        return Mat3::zero();
+        return None;
     }
     let [vx, vy, vz] = velocity.at(i);
     let vi = Vec3::new(vx, vy, vz);
     let mut grad = Mat3::zero();
+    let mut moment = Mat3::zero();
     neighborhood.for_each_neighbor(i, fluid.kernels.h2, |j, r_ij, r2| {
         let [x, y, z] = velocity.at(j);
-        let dv = (Vec3::new(x, y, z) - vi) * (R::ONE / density.at(j));
-        grad.add_outer(dv, fluid.kernels.spiky_gradient(r_ij, r2));
+        let volume_over_mass = R::ONE / density.at(j);
+        let grad_w = fluid.kernels.spiky_gradient(r_ij, r2);
+        grad.add_outer((Vec3::new(x, y, z) - vi) * volume_over_mass, grad_w);
+        if MOMENT {
+            moment.add_outer(-r_ij * volume_over_mass, grad_w);
+        }
     });
-    grad.scaled(fluid.mass)
+    Some((grad.scaled(fluid.mass), moment.scaled(fluid.mass)))
 }
 
 /// How a pass estimates the velocity gradient, fixed for a run.
