@@ -759,11 +759,13 @@ fn random_stages(engine: Engine, seed: u64) {
 
     // The float passes over the live particles, sorted, with the dam break's constants (h =
     // 0.08 m, within the 0.1 m cells, the Cross law) and random velocities up to 0.5 m/s; a
-    // quarter of them (ids below n / 4) are wall particles, whose acceleration is zero.
+    // quarter of them (ids below n / 4) are wall particles, whose acceleration is zero and whose
+    // density is floored at rho0.
     let scene = dam_break();
     let initial = initial_particles(&scene, "dam_break.toml").expect("valid");
     let mut fluid = Simulation::<f64, _>::new(&scene, &initial, cross::<f64>(&scene)).run.fluid;
     fluid.boundary_count = n as u32 / 4;
+    fluid.wall_density_floor = fluid.rest_density;
     let rheology = cross_law::<f64>(&scene.material.viscosity);
     let sorted: [Vec<f64>; 3] = [0, 1, 2].map(|a| order[..live].iter().map(|&i| position[a][i as usize]).collect());
     let velocity: [Vec<f64>; 3] = [0, 1, 2].map(|_| (0..live).map(|_| uniform(&mut rng) - 0.5).collect());
@@ -781,7 +783,7 @@ fn random_stages(engine: Engine, seed: u64) {
             topology: Open,
             near_fluid: View::new(&everywhere),
         };
-        let density_args = DensityArgs { neighborhood, fluid, density: ViewMut::new(&mut density) };
+        let density_args = DensityArgs { neighborhood, fluid, id: View::new(id), density: ViewMut::new(&mut density) };
         (0..live).for_each(|i| density_pass::<f64, Poly6, _>(i, &density_args));
         let [xx, yy, zz, xy, xz, yz] = &mut stress;
         let stress_view = SymTensorViewMut {
@@ -837,7 +839,7 @@ fn random_stages(engine: Engine, seed: u64) {
         xz: xz.view_mut(live),
         yz: yz.view_mut(live),
     };
-    let density_args = DensityArgs { neighborhood, fluid, density: device_density.view_mut(live) };
+    let density_args = DensityArgs { neighborhood, fluid, id: id_on_device.view(live), density: device_density.view_mut(live) };
     let stress_args = StressArgs {
         neighborhood,
         gradient: KernelSum,

@@ -168,6 +168,7 @@ fn fluid<R: Real>() -> Fluid<R> {
         rest_density: R::from_f64(1000.0),
         sound_speed2: R::ONE,
         pressure_floor: R::from_f64(f64::NEG_INFINITY),
+        wall_density_floor: R::ZERO,
         pressure_pair_weight: R::from_f64(0.5),
         gravity: Vec3::zero(),
         kernels: SmoothingKernels::new(0.01),
@@ -795,6 +796,7 @@ impl Ball {
         let args = DensityArgs {
             neighborhood: grid.neighborhood(vec3_view(&particles.position, n), Open),
             fluid,
+            id: View::new(&particles.id[..n]),
             density: ViewMut::new(&mut particles.density[..n]),
         };
         (0..n).for_each(|i| density_pass::<f64, Poly6, _>(i, &args));
@@ -1137,6 +1139,63 @@ fn a_stretched_cylinder_carries_the_tension_of_its_operator() {
         "renormalized: {thin_renormalized} and {thick_renormalized}"
     );
     assert!(thick_renormalized <= 1.0, "renormalized at 10 spacings: {thick_renormalized}");
+}
+
+/// The paper's walls at rest get Eq. (5)'s density, short at the wall's own surface where the
+/// support reaches past it into empty space. With Eq. (6) as printed that deficit is a tension
+/// that draws liquid into the wall; floored at rho0 the wall pushes and never pulls. A fluid
+/// particle at rho0 (as the continuity equation starts it) half a spacing above the surface of
+/// a bare wall slab.
+#[test]
+fn a_wall_at_rest_pushes_and_never_pulls() {
+    use coil::simulation::particles::{vec3_view, ModelFields};
+    use coil_kernels::acceleration::acceleration;
+    use coil_kernels::density::{density_pass, DensityArgs, Poly6};
+    use coil_kernels::view::ViewMut;
+    use coil_kernels::viscosity::laplacian_muller2003::VelocityLaplacian;
+    let s = LATTICE_SPACING;
+    let is_wall = |x: [f64; 3]| x[1] < 3.0 * s;
+    let probe = [5.5 * s, 3.5 * s, 5.5 * s];
+    let keep = |x: [f64; 3]| is_wall(x) || x.iter().zip(probe).all(|(a, b)| (a - b).abs() < 0.1 * s);
+    let (mut p, grid, lattice) = sorted_lattice(10, ModelFields::default(), keep, |_| [0.0; 3]);
+    let n = p.len();
+    let walls = (0..n).filter(|&i| is_wall([0, 1, 2].map(|a| p.position[a][i]))).count();
+    let mut next = [0u32, walls as u32];
+    for i in 0..n {
+        let wall = is_wall([0, 1, 2].map(|a| p.position[a][i]));
+        p.id[i] = next[usize::from(!wall)];
+        next[usize::from(!wall)] += 1;
+    }
+    let probe_index = (0..n).find(|&i| p.id[i] == walls as u32).expect("the probe");
+    let rho0 = lattice.rest_density;
+    let mut pull = Vec::new();
+    for floor in [0.0, rho0] {
+        let fluid = Fluid { sound_speed2: 400.0, boundary_count: walls as u32, wall_density_floor: floor, ..lattice };
+        let args = DensityArgs {
+            neighborhood: grid.neighborhood(vec3_view(&p.position, n), Open),
+            fluid,
+            id: View::new(&p.id[..n]),
+            density: ViewMut::new(&mut p.density[..n]),
+        };
+        (0..n).for_each(|i| density_pass::<f64, Poly6, _>(i, &args));
+        p.density[probe_index] = rho0;
+        let lightest = (0..n).filter(|&i| (p.id[i] as usize) < walls).map(|i| p.density[i]).fold(f64::INFINITY, f64::min);
+        let nb = grid.neighborhood(vec3_view(&p.position, n), Open);
+        let still = VelocityLaplacian { mu0: 0.0, velocity: vec3_view(&p.velocity, n) };
+        let a = acceleration(probe_index, &nb, &View::new(&p.density[..n]), &fluid, &still);
+        println!(
+            "wall density floor {floor}: lightest wall particle {lightest:.1} kg/m^3, probe's acceleration {:.2} m/s^2 upward",
+            a.y
+        );
+        if floor == 0.0 {
+            assert!(lightest < 0.8 * rho0, "the bare wall's surface: {lightest}");
+        } else {
+            assert!(lightest >= rho0, "floored: {lightest}");
+        }
+        pull.push(a.y);
+    }
+    assert!(pull[0] < -1.0, "the paper's walls with Eq. (6) as printed pull: {} m/s^2", pull[0]);
+    assert!(pull[1] >= 0.0, "floored, they push: {} m/s^2", pull[1]);
 }
 
 /// The renormalized gradient is exact for a linear velocity field wherever the neighbors span

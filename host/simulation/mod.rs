@@ -174,6 +174,7 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
             rest_density: R::from_f64(mat.rest_density_kg_m3),
             sound_speed2: R::from_f64(mat.sound_speed_m_s * mat.sound_speed_m_s),
             pressure_floor: R::from_f64(if mat.clamp_negative_pressure { 0.0 } else { f64::NEG_INFINITY }),
+            wall_density_floor: R::from_f64(if mat.clamp_negative_pressure { 0.0 } else { mat.rest_density_kg_m3 }),
             pressure_pair_weight: R::from_f64(mat.pressure_gradient.pair_weight()),
             gravity: Vec3::from_f64(g),
             kernels,
@@ -386,7 +387,7 @@ fn density_with<R: Real, M: Model<R>, K: DensityKernel, T: Topology, N: Neighbor
             density: v.density,
             density_rate,
         }),
-        None => passes.density::<K>(DensityArgs { neighborhood: v.neighbors, fluid: run.fluid, density: v.density }),
+        None => passes.density::<K>(DensityArgs { neighborhood: v.neighbors, fluid: run.fluid, id: v.id, density: v.density }),
     }
 }
 

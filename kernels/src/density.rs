@@ -5,7 +5,7 @@ use crate::fluid::Fluid;
 use crate::real::Real;
 use crate::smoothing::SmoothingKernels;
 use crate::topology::Open;
-use crate::view::ViewMut;
+use crate::view::{View, ViewMut};
 use core::fmt::Debug;
 
 /// The kernel W of the density sum, Eq. (5), fixed for a run.
@@ -64,13 +64,17 @@ pub fn pressure<R: Real>(density: R, fluid: &Fluid<R>) -> R {
 pub struct DensityArgs<'a, R, N = Neighborhood<'a, Open>> {
     pub neighborhood: N,
     pub fluid: Fluid<R>,
+    pub id: View<'a, u32>,
     pub density: ViewMut<'a, R>,
 }
 
-/// The density pass for particle `i` with the density kernel `K`. Pressure is not stored:
-/// Eq. (6) is cheaper to evaluate where it is read than to load.
+/// The density pass for particle `i` with the density kernel `K`, fixed boundary particles'
+/// floored by [`Fluid::wall_density`]. Pressure is not stored: Eq. (6) is cheaper to evaluate
+/// where it is read than to load.
 #[inline(always)]
 pub fn density_pass<R: Real, K: DensityKernel, N: Neighbors>(i: usize, a: &DensityArgs<R, N>) {
+    let summed = density::<R, K, N>(i, &a.neighborhood, &a.fluid);
+    let rho = if a.fluid.is_boundary(a.id.at(i)) { a.fluid.wall_density(summed) } else { summed };
     // SAFETY: invocation i owns entry i.
-    unsafe { a.density.write(i, density::<R, K, N>(i, &a.neighborhood, &a.fluid)) };
+    unsafe { a.density.write(i, rho) };
 }
