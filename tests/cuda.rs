@@ -34,7 +34,7 @@ use coil_kernels::nozzle::{NozzleArgs, NozzleShiftArgs};
 use coil_kernels::renormalization_bonet1999::Renormalized;
 use coil_kernels::shifting_sun2017::{ShiftArgs, ShiftingArgs};
 use coil_kernels::topology::{Open, Periodic, Topology};
-use coil_kernels::velocity_gradient::KernelSum;
+use coil_kernels::velocity_gradient::{GradientEstimate, KernelSum, OwnDensity};
 use coil_kernels::view::{View, ViewMut};
 use coil_kernels::viscosity::hourglass_ganzenmuller2015::{HourglassControlledStress, VelocityGradientArgs};
 use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
@@ -93,6 +93,8 @@ fn ptx_entry_parameters_match_the_host_argument_layouts() {
         add("stress_cross", size_of::<StressArgs<R, Cross<R>, KernelSum, Neighborhood<T>>>());
         add("stress_newtonian_renormalized", size_of::<StressArgs<R, Newtonian<R>, Renormalized, Neighborhood<T>>>());
         add("stress_cross_renormalized", size_of::<StressArgs<R, Cross<R>, Renormalized, Neighborhood<T>>>());
+        add("stress_newtonian_own_density", size_of::<StressArgs<R, Newtonian<R>, OwnDensity, Neighborhood<T>>>());
+        add("stress_cross_own_density", size_of::<StressArgs<R, Cross<R>, OwnDensity, Neighborhood<T>>>());
         add("acceleration_stress", size_of::<AccelerationArgs<R, StressDivergence<R>, Neighborhood<T>>>());
         add("acceleration_laplacian", size_of::<AccelerationArgs<R, VelocityLaplacian<R>, Neighborhood<T>>>());
         add("shear_viscosity_cross", size_of::<ShearViscosityArgs<R, Cross<R>, Neighborhood<T>>>());
@@ -490,14 +492,13 @@ fn particle_shifting_on_the_gpu_agrees_with_the_cpu() {
     }
 }
 
-/// The jet with the paper's operator reading the renormalized velocity gradient: its own stress
-/// entries, whose second moment sum and 3x3 inverse the device runs as the CPU does. The
-/// renormalization moves the jet measurably against Eq. (8) as printed.
-#[test]
-fn the_renormalized_gradient_on_the_gpu_agrees_with_the_cpu() {
+/// The jet with the paper's operator reading the velocity gradient `estimate` (`choice` in the
+/// scene) runs on the device as on the CPU, and the estimate moves the jet measurably against
+/// Eq. (8) as printed.
+fn a_gradient_estimate_on_the_gpu_agrees_with_the_cpu<G: GradientEstimate>(choice: coil::scene::VelocityGradient, estimate: G) {
     let mut scene = small_jet();
-    scene.material.viscosity.velocity_gradient = coil::scene::VelocityGradient::Renormalized;
-    let model = StressModel(Newtonian { nu0: 0.001 }, Renormalized);
+    scene.material.viscosity.velocity_gradient = choice;
+    let model = StressModel(Newtonian { nu0: 0.001 }, estimate);
     let initial = initial_particles(&small_jet(), "test scene").expect("valid");
     let mut printed = Simulation::<f64, _>::new(&small_jet(), &initial, StressModel(Newtonian { nu0: 0.001 }, KernelSum));
     for _ in 0..300 {
@@ -508,16 +509,29 @@ fn the_renormalized_gradient_on_the_gpu_agrees_with_the_cpu() {
     for engine in engines() {
         let (cpu, on_gpu) = both_with::<f64, _>(engine.open(), &scene, model, 300, 2e-4);
         assert_eq!(on_gpu.run.fluid_count(), cpu.run.fluid_count(), "{engine:?}: fluid particles");
-        let renormalized = state_by_id(cpu.particles());
-        let moved = renormalized
+        let estimated = state_by_id(cpu.particles());
+        let moved = estimated
             .iter()
             .filter_map(|(id, x, _)| printed.get(id).map(|y| (0..3).map(|k| (x[k] - y[k]).abs()).fold(0.0, f64::max)))
             .fold(0.0, f64::max);
-        let worst = largest_position_difference(&renormalized, &state_by_id(on_gpu.particles()));
-        println!("{engine:?}, renormalized jet: {moved:.3e} m from Eq. (8)'s, {worst:.3e} m between backends");
-        assert!(moved > 1e-6, "the renormalization moved the jet by {moved:.3e} m only: the test would not see it");
-        assert!(worst <= engine.f64_tolerance_m(), "{engine:?}, renormalized jet: positions differ by {worst:.3e} m");
+        let worst = largest_position_difference(&estimated, &state_by_id(on_gpu.particles()));
+        println!("{engine:?}, {choice:?} jet: {moved:.3e} m from Eq. (8)'s, {worst:.3e} m between backends");
+        assert!(moved > 1e-6, "{choice:?} moved the jet by {moved:.3e} m only: the test would not see it");
+        assert!(worst <= engine.f64_tolerance_m(), "{engine:?}, {choice:?} jet: positions differ by {worst:.3e} m");
     }
+}
+
+/// The renormalized gradient's own stress entries, whose second moment sum and 3x3 inverse the
+/// device runs as the CPU does.
+#[test]
+fn the_renormalized_gradient_on_the_gpu_agrees_with_the_cpu() {
+    a_gradient_estimate_on_the_gpu_agrees_with_the_cpu(coil::scene::VelocityGradient::Renormalized, Renormalized);
+}
+
+/// The own-density gradient's stress entries.
+#[test]
+fn the_own_density_gradient_on_the_gpu_agrees_with_the_cpu() {
+    a_gradient_estimate_on_the_gpu_agrees_with_the_cpu(coil::scene::VelocityGradient::OwnDensity, OwnDensity);
 }
 
 /// A channel periodic in x and z (Morris et al.'s, 10 across, mirrored walls), its fluid

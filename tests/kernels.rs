@@ -11,7 +11,7 @@ use coil_kernels::renormalization_bonet1999::Renormalized;
 use coil_kernels::smoothing::SmoothingKernels;
 use coil_kernels::topology::{Open, Periodic, Topology};
 use coil_kernels::vec3::{Mat3, Vec3};
-use coil_kernels::velocity_gradient::{rate_of_deformation, shear_rate, GradientEstimate, KernelSum};
+use coil_kernels::velocity_gradient::{rate_of_deformation, shear_rate, GradientEstimate, KernelSum, OwnDensity};
 use coil_kernels::view::{Vec3View, Vec3ViewMut, View};
 use coil_kernels::Real;
 use common::uniform;
@@ -803,10 +803,29 @@ impl Ball {
         Ball { particles, grid, fluid }
     }
 
+    /// The paper's operator's accelerations (m/s^2) of the particles moving at `velocity` (m/s,
+    /// by axis), nu = 0.1 m^2/s, with the velocity gradient estimated by `G`.
+    fn paper_accelerations<G: GradientEstimate>(&mut self, velocity: &[Vec<f64>; 3], gradient: G) -> Vec<Vec3<f64>> {
+        use coil::simulation::particles::{stress_view_mut, vec3_view};
+        use coil_kernels::acceleration::acceleration;
+        use coil_kernels::viscosity::stress_andrade2014::StressDivergence;
+        use coil_kernels::viscosity::stress_andrade2014::{stress_pass, StressArgs};
+        let (fluid, p) = (self.fluid, &mut self.particles);
+        let n = p.len();
+        let nb = self.grid.neighborhood(vec3_view(&p.position, n), Open);
+        let velocity = vec3_view(velocity, n);
+        let density = View::new(&p.density[..n]);
+        let stress = stress_view_mut(p.stress.as_mut().expect("allocated"), n);
+        let args = StressArgs { neighborhood: nb, gradient, fluid, rheology: Newtonian { nu0: 0.1 }, velocity, density, stress };
+        (0..n).for_each(|i| stress_pass(i, &args));
+        let paper = StressDivergence { stress: stress.read() };
+        (0..n).map(|i| acceleration(i, &nb, &density, &fluid, &paper)).collect()
+    }
+
     /// The viscous accelerations (m/s^2) of the particles moving at `velocity` (m/s, by axis),
     /// nu = 0.1 m^2/s: by the paper's operator, with hourglass control 1, Müller's and Morris's.
     fn viscous_accelerations(&mut self, velocity: &[Vec<f64>; 3]) -> [Vec<Vec3<f64>>; 4] {
-        use coil::simulation::particles::{mat3_view_mut, stress_view_mut, vec3_view};
+        use coil::simulation::particles::{mat3_view_mut, vec3_view};
         use coil_kernels::acceleration::acceleration;
         use coil_kernels::view::ViewMut;
         use coil_kernels::viscosity::hourglass_ganzenmuller2015::{
@@ -814,29 +833,23 @@ impl Ball {
         };
         use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
         use coil_kernels::viscosity::laplacian_muller2003::VelocityLaplacian;
-        use coil_kernels::viscosity::stress_andrade2014::StressDivergence;
-        use coil_kernels::viscosity::stress_andrade2014::{stress_pass, StressArgs};
+        let paper = self.paper_accelerations(velocity, KernelSum);
         let (nu0, fluid, p) = (0.1, self.fluid, &mut self.particles);
         let n = p.len();
         let nb = self.grid.neighborhood(vec3_view(&p.position, n), Open);
         let velocity = vec3_view(velocity, n);
         let density = View::new(&p.density[..n]);
-        let stress = stress_view_mut(p.stress.as_mut().expect("allocated"), n);
-        let args =
-            StressArgs { neighborhood: nb, gradient: KernelSum, fluid, rheology: Newtonian { nu0 }, velocity, density, stress };
-        (0..n).for_each(|i| stress_pass(i, &args));
         let gradient = mat3_view_mut(p.velocity_gradient.as_mut().expect("allocated"), n);
         let viscosity = ViewMut::new(&mut p.viscosity.as_mut().expect("allocated")[..n]);
         let rheology = Newtonian { nu0 };
         let args = VelocityGradientArgs { neighborhood: nb, fluid, rheology, velocity, density, gradient, viscosity };
         (0..n).for_each(|i| velocity_gradient_pass(i, &args));
-        let paper = StressDivergence { stress: stress.read() };
         let controlled =
             HourglassControlledStress { coefficient: 1.0, velocity, gradient: gradient.read(), viscosity: viscosity.read() };
         let muller = VelocityLaplacian { mu0: nu0 * fluid.rest_density.to_f64(), velocity };
         let morris = MorrisViscosity { velocity, viscosity: Newtonian { nu0 } };
         [
-            (0..n).map(|i| acceleration(i, &nb, &density, &fluid, &paper)).collect(),
+            paper,
             (0..n).map(|i| acceleration(i, &nb, &density, &fluid, &controlled)).collect(),
             (0..n).map(|i| acceleration(i, &nb, &density, &fluid, &muller)).collect(),
             (0..n).map(|i| acceleration(i, &nb, &density, &fluid, &morris)).collect(),
@@ -950,18 +963,20 @@ fn the_velocity_gradient_skips_only_wall_particles_with_no_fluid_within_h() {
     }
 }
 
-/// The viscous accelerations of the [`Ball`] as matrices of its 3n velocities, row 3i + k the
-/// k-th component of particle i's acceleration (1/s): for the paper's operator, with hourglass
-/// control 1, Müller's and Morris's, with their order 3n.
-fn free_surface_viscous_matrices() -> (usize, [Vec<f64>; 4]) {
+/// The viscous accelerations `accelerations` gives the [`Ball`] as matrices of its 3n
+/// velocities, row 3i + k the k-th component of particle i's acceleration (1/s), with their
+/// order 3n.
+fn free_surface_matrices<const K: usize>(
+    mut accelerations: impl FnMut(&mut Ball, &[Vec<f64>; 3]) -> [Vec<Vec3<f64>>; K],
+) -> (usize, [Vec<f64>; K]) {
     let mut ball = Ball::new();
     let n = ball.particles.len();
     let dof = 3 * n;
-    let mut matrices: [Vec<f64>; 4] = std::array::from_fn(|_| vec![0.0; dof * dof]);
+    let mut matrices: [Vec<f64>; K] = std::array::from_fn(|_| vec![0.0; dof * dof]);
     for column in 0..dof {
         let mut v = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
         v[column % 3][column / 3] = 1.0;
-        for (m, a) in matrices.iter_mut().zip(ball.viscous_accelerations(&v)) {
+        for (m, a) in matrices.iter_mut().zip(accelerations(&mut ball, &v)) {
             for (i, a) in a.iter().enumerate() {
                 for (k, a_k) in [a.x, a.y, a.z].into_iter().enumerate() {
                     m[(3 * i + k) * dof + column] = a_k;
@@ -970,6 +985,12 @@ fn free_surface_viscous_matrices() -> (usize, [Vec<f64>; 4]) {
         }
     }
     (dof, matrices)
+}
+
+/// [`free_surface_matrices`] of the paper's operator, with hourglass control 1, Müller's and
+/// Morris's.
+fn free_surface_viscous_matrices() -> (usize, [Vec<f64>; 4]) {
+    free_surface_matrices(Ball::viscous_accelerations)
 }
 
 /// Whether the symmetric `dof` x `dof` matrix `a` is positive definite: its Cholesky
@@ -1018,6 +1039,26 @@ fn the_viscous_operators_never_create_kinetic_energy_or_momentum_at_a_free_surfa
         assert!(dissipative, "{name}: creates kinetic energy");
         assert!(net_force < 1e-12 * scale, "{name}: net acceleration {net_force} 1/s");
     }
+}
+
+/// With Eq. (8) taken at the particle's own density the paper's operator is symmetric: Eq. (9)
+/// is then the gradient's exact negative adjoint, as an implicit solve by conjugate gradients
+/// needs (over the free-surface ball, whose surface densities are 30 % and more below rho0).
+/// With Eq. (8) as printed it is not, by far more than round-off. Negative semidefinite as well
+/// (the test above covers the symmetric part of every operator; here it is the matrix itself).
+#[test]
+fn the_own_density_gradient_makes_the_papers_operator_symmetric() {
+    let (dof, [printed, own]) =
+        free_surface_matrices(|ball, v| [ball.paper_accelerations(v, KernelSum), ball.paper_accelerations(v, OwnDensity)]);
+    let scale = (0..dof).map(|r| (0..dof).map(|c| own[r * dof + c].abs()).sum::<f64>()).fold(0.0, f64::max);
+    let asymmetry = |l: &[f64]| (0..dof * dof).map(|k| (l[k] - l[(k % dof) * dof + k / dof]).abs()).fold(0.0, f64::max);
+    let (printed_asymmetry, own_asymmetry) = (asymmetry(&printed), asymmetry(&own));
+    eprintln!("largest |A - A^T| against the largest row sum {scale:.2e} 1/s: Eq. (8) as printed {printed_asymmetry:.2e}, own density {own_asymmetry:.2e}");
+    assert!(own_asymmetry < 1e-12 * scale, "own density: {own_asymmetry} 1/s");
+    assert!(printed_asymmetry > 1e-3 * scale, "Eq. (8) as printed: {printed_asymmetry} 1/s");
+    let mut decay: Vec<f64> = own.iter().map(|a| -a).collect();
+    (0..dof).for_each(|k| decay[k * dof + k] += 1e-9 * scale);
+    assert!(is_positive_definite(decay, dof), "own density: the operator creates kinetic energy");
 }
 
 /// d rho / dt of the particle nearest the centre of a 12^3 [`sorted_lattice`] at rest density

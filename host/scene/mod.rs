@@ -251,6 +251,10 @@ pub enum VelocityGradient {
     /// field wherever the neighbors span three dimensions, so a thin thread carries the
     /// viscous stress it should.
     Renormalized,
+    /// Eq. (8) with the neighbors' volumes at the particle's own density, m_j / rho_i: Eq. (9)
+    /// is then its exact adjoint, so the operator never adds kinetic energy and its matrix is
+    /// symmetric, which an implicit viscosity solve needs.
+    OwnDensity,
 }
 
 impl VelocityGradient {

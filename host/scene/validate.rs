@@ -210,7 +210,8 @@ impl Check<'_> {
         {
             return self.fail(
                 "material.viscosity.velocity_gradient",
-                "\"renormalized\" applies to the paper's operator (operator = \"stress\") without hourglass control".into(),
+                "\"renormalized\" and \"own_density\" apply to the paper's operator (operator = \"stress\") without hourglass control"
+                    .into(),
             );
         }
         Ok(())

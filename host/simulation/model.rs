@@ -13,7 +13,7 @@ use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::renormalization_bonet1999::Renormalized;
 use coil_kernels::topology::{Open, Topology};
-use coil_kernels::velocity_gradient::{GradientEstimate, KernelSum};
+use coil_kernels::velocity_gradient::{GradientEstimate, KernelSum, OwnDensity};
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::viscosity::hourglass_ganzenmuller2015::{HourglassControlledStress, VelocityGradientArgs};
 use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
@@ -95,10 +95,12 @@ pub fn with_model<R: Real, W: WithModel>(scene: &Scene, work: W) -> W::Output {
         (ViscosityOperator::Stress, true) => match v.velocity_gradient {
             VelocityGradient::Sph => work.with::<R, _>(StressModel(Newtonian { nu0 }, KernelSum)),
             VelocityGradient::Renormalized => work.with::<R, _>(StressModel(Newtonian { nu0 }, Renormalized)),
+            VelocityGradient::OwnDensity => work.with::<R, _>(StressModel(Newtonian { nu0 }, OwnDensity)),
         },
         (ViscosityOperator::Stress, false) => match v.velocity_gradient {
             VelocityGradient::Sph => work.with::<R, _>(StressModel(cross_law(v), KernelSum)),
             VelocityGradient::Renormalized => work.with::<R, _>(StressModel(cross_law(v), Renormalized)),
+            VelocityGradient::OwnDensity => work.with::<R, _>(StressModel(cross_law(v), OwnDensity)),
         },
     }
 }

@@ -28,7 +28,7 @@ use crate::nozzle::{nozzle_pass, nozzle_shift_pass, NozzleArgs, NozzleShiftArgs}
 use crate::renormalization_bonet1999::Renormalized;
 use crate::shifting_sun2017::{shift_pass, shifting_pass, ShiftArgs, ShiftingArgs};
 use crate::topology::{Open, Periodic};
-use crate::velocity_gradient::KernelSum;
+use crate::velocity_gradient::{KernelSum, OwnDensity};
 use crate::view::{View, ViewMut};
 use crate::viscosity::hourglass_ganzenmuller2015::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
 use crate::viscosity::laplacian_morris1997::MorrisViscosity;
@@ -230,6 +230,30 @@ per_neighborhood_kernels!(
     stress_cross_renormalized_periodic_f64,
     StressArgs<f64, Cross<f64>, Renormalized>,
     stress_pass<f64, Cross<f64>, Renormalized>
+);
+per_neighborhood_kernels!(
+    stress_newtonian_own_density_f32,
+    stress_newtonian_own_density_periodic_f32,
+    StressArgs<f32, Newtonian<f32>, OwnDensity>,
+    stress_pass<f32, Newtonian<f32>, OwnDensity>
+);
+per_neighborhood_kernels!(
+    stress_newtonian_own_density_f64,
+    stress_newtonian_own_density_periodic_f64,
+    StressArgs<f64, Newtonian<f64>, OwnDensity>,
+    stress_pass<f64, Newtonian<f64>, OwnDensity>
+);
+per_neighborhood_kernels!(
+    stress_cross_own_density_f32,
+    stress_cross_own_density_periodic_f32,
+    StressArgs<f32, Cross<f32>, OwnDensity>,
+    stress_pass<f32, Cross<f32>, OwnDensity>
+);
+per_neighborhood_kernels!(
+    stress_cross_own_density_f64,
+    stress_cross_own_density_periodic_f64,
+    StressArgs<f64, Cross<f64>, OwnDensity>,
+    stress_pass<f64, Cross<f64>, OwnDensity>
 );
 per_neighborhood_kernels!(
     acceleration_stress_f32,
@@ -520,6 +544,14 @@ pub const ENTRIES: &[(&str, Emulated)] = {
         stress_cross_renormalized_periodic_f32,
         stress_cross_renormalized_f64,
         stress_cross_renormalized_periodic_f64,
+        stress_newtonian_own_density_f32,
+        stress_newtonian_own_density_periodic_f32,
+        stress_newtonian_own_density_f64,
+        stress_newtonian_own_density_periodic_f64,
+        stress_cross_own_density_f32,
+        stress_cross_own_density_periodic_f32,
+        stress_cross_own_density_f64,
+        stress_cross_own_density_periodic_f64,
         acceleration_stress_f32,
         acceleration_stress_periodic_f32,
         acceleration_stress_f64,

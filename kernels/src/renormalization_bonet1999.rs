@@ -28,7 +28,7 @@ impl GradientEstimate for Renormalized {
         density: &View<R>,
         fluid: &Fluid<R>,
     ) -> Mat3<R> {
-        match kernel_sums::<R, N, true>(i, neighborhood, velocity, density, fluid) {
+        match kernel_sums::<R, N, true, false>(i, neighborhood, velocity, density, fluid) {
             Some((grad, moment)) => match moment.inverse() {
                 Some(inverse) => grad.matmul(inverse),
                 None => grad,

@@ -18,17 +18,18 @@ pub fn velocity_gradient<R: Real, N: Neighbors>(
     density: &View<R>,
     fluid: &Fluid<R>,
 ) -> Mat3<R> {
-    match kernel_sums::<R, N, false>(i, neighborhood, velocity, density, fluid) {
+    match kernel_sums::<R, N, false, false>(i, neighborhood, velocity, density, fluid) {
         Some((grad, _)) => grad,
         None => Mat3::zero(),
     }
 }
 
 /// Eq. (8)'s sum and, with `MOMENT`, its moment matrix sum_j (m_j / rho_j) (x_j - x_i) ⊗
-/// grad_i W(x_ij) (dimensionless; the identity inside a lattice), in one neighbor loop. `None`
-/// away from fluid, where every term is zero.
+/// grad_i W(x_ij) (dimensionless; the identity inside a lattice), in one neighbor loop; with
+/// `OWN_DENSITY` each neighbor's volume is m_j / rho_i instead of m_j / rho_j. `None` away from
+/// fluid, where every term is zero.
 #[inline(always)]
-pub(crate) fn kernel_sums<R: Real, N: Neighbors, const MOMENT: bool>(
+pub(crate) fn kernel_sums<R: Real, N: Neighbors, const MOMENT: bool, const OWN_DENSITY: bool>(
     i: usize,
     neighborhood: &N,
     velocity: &Vec3View<R>,
@@ -40,11 +41,12 @@ pub(crate) fn kernel_sums<R: Real, N: Neighbors, const MOMENT: bool>(
     }
     let [vx, vy, vz] = velocity.at(i);
     let vi = Vec3::new(vx, vy, vz);
+    let own_volume_over_mass = if OWN_DENSITY { R::ONE / density.at(i) } else { R::ZERO };
     let mut grad = Mat3::zero();
     let mut moment = Mat3::zero();
     neighborhood.for_each_neighbor(i, fluid.kernels.h2, |j, r_ij, r2| {
         let [x, y, z] = velocity.at(j);
-        let volume_over_mass = R::ONE / density.at(j);
+        let volume_over_mass = if OWN_DENSITY { own_volume_over_mass } else { R::ONE / density.at(j) };
         let grad_w = fluid.kernels.spiky_gradient(r_ij, r2);
         grad.add_outer((Vec3::new(x, y, z) - vi) * volume_over_mass, grad_w);
         if MOMENT {
@@ -83,6 +85,33 @@ impl GradientEstimate for KernelSum {
         fluid: &Fluid<R>,
     ) -> Mat3<R> {
         velocity_gradient(i, neighborhood, velocity, density, fluid)
+    }
+}
+
+/// Eq. (8) with each neighbor's volume taken at the particle's own density, m_j / rho_i:
+/// grad v_i = (1 / rho_i) sum_j m_j (v_j - v_i) ⊗ grad_i W(x_ij) (1/s). With it Eq. (9) is the
+/// exact negative adjoint of the gradient: over any set of particles of equal mass, sum_i m
+/// v_i · a_i = -sum_i (m / rho_i) tau_i : grad v_i, which is never positive, and the matrix
+/// that maps velocities to the operator's accelerations is symmetric and negative semidefinite,
+/// as a conjugate-gradient solve of implicit viscosity needs. Eq. (8) as printed, m_j / rho_j,
+/// is neither where densities differ.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct OwnDensity;
+
+impl GradientEstimate for OwnDensity {
+    const NAME: &'static str = "own_density";
+    #[inline(always)]
+    fn velocity_gradient<R: Real, N: Neighbors>(
+        i: usize,
+        neighborhood: &N,
+        velocity: &Vec3View<R>,
+        density: &View<R>,
+        fluid: &Fluid<R>,
+    ) -> Mat3<R> {
+        match kernel_sums::<R, N, false, true>(i, neighborhood, velocity, density, fluid) {
+            Some((grad, _)) => grad,
+            None => Mat3::zero(),
+        }
     }
 }
 
