@@ -1046,6 +1046,7 @@ fn the_viscous_operators_never_create_kinetic_energy_or_momentum_at_a_free_surfa
 /// needs (over the free-surface ball, whose surface densities are 30 % and more below rho0).
 /// With Eq. (8) as printed it is not, by far more than round-off. Negative semidefinite as well
 /// (the test above covers the symmetric part of every operator; here it is the matrix itself).
+/// Both Laplacians, whose pair weights are symmetric in i and j, are symmetric too.
 #[test]
 fn the_own_density_gradient_makes_the_papers_operator_symmetric() {
     let (dof, [printed, own]) =
@@ -1056,6 +1057,12 @@ fn the_own_density_gradient_makes_the_papers_operator_symmetric() {
     eprintln!("largest |A - A^T| against the largest row sum {scale:.2e} 1/s: Eq. (8) as printed {printed_asymmetry:.2e}, own density {own_asymmetry:.2e}");
     assert!(own_asymmetry < 1e-12 * scale, "own density: {own_asymmetry} 1/s");
     assert!(printed_asymmetry > 1e-3 * scale, "Eq. (8) as printed: {printed_asymmetry} 1/s");
+    let (_, [_, _, muller, morris]) = free_surface_viscous_matrices();
+    for (name, l) in [("Müller's", muller), ("Morris's", morris)] {
+        let a = asymmetry(&l);
+        eprintln!("{name} Laplacian: largest |A - A^T| {a:.2e} 1/s");
+        assert!(a < 1e-12 * scale, "{name}: {a} 1/s");
+    }
     let mut decay: Vec<f64> = own.iter().map(|a| -a).collect();
     (0..dof).for_each(|k| decay[k * dof + k] += 1e-9 * scale);
     assert!(is_positive_definite(decay, dof), "own density: the operator creates kinetic energy");

@@ -30,13 +30,14 @@ impl ParticleLimit {
 
     /// The limit with `memory` bytes of memory (`None`: unknown, so only the ids limit).
     pub fn with_memory(scene: &Scene, memory: Option<u64>) -> Self {
-        let per_particle = with_precision_and_model(scene.simulation.precision, scene, BytesPerParticle) + SETUP_AND_GRID_BYTES;
+        let per_particle =
+            with_precision_and_model(scene.simulation.precision, scene, BytesPerParticle(scene)) + SETUP_AND_GRID_BYTES;
         let ids = u32::MAX as f64;
         match memory.map(|bytes| (bytes, bytes as f64 / per_particle as f64)) {
             Some((bytes, fit)) if fit < ids => Self {
                 most: fit,
                 why: format!(
-                    "at about {per_particle} bytes a particle (this precision and viscosity operator), this machine's {:.1} GiB of memory holds about {fit:.3e} particles",
+                    "at about {per_particle} bytes a particle (this precision, viscosity operator and formulation), this machine's {:.1} GiB of memory holds about {fit:.3e} particles",
                     bytes as f64 / (1u64 << 30) as f64
                 ),
             },
@@ -45,12 +46,12 @@ impl ParticleLimit {
     }
 }
 
-struct BytesPerParticle;
+struct BytesPerParticle<'a>(&'a Scene);
 
-impl WithModel for BytesPerParticle {
+impl WithModel for BytesPerParticle<'_> {
     type Output = usize;
     fn with<R: Real, M: Model<R>>(self, _model: M) -> usize {
-        Particles::<R>::bytes_per_particle_with(M::FIELDS)
+        Particles::<R>::bytes_per_particle_with(M::FIELDS.with_scene(self.0))
     }
 }
 

@@ -11,9 +11,9 @@ pub mod time_step;
 use crate::cpu::neighbor_grid::NeighborGrid;
 use crate::cpu::CpuBackend;
 use crate::scene::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, InitialParticles};
-use crate::scene::{DensityEquation, DensityKernelKind, Scene, ViscousVelocity, Walls};
+use crate::scene::{DensityKernelKind, Scene, ViscousVelocity, Walls};
 use crate::simulation::inlet::Inlet;
-use crate::simulation::model::{Model, ModelFields, ParticleState};
+use crate::simulation::model::{Model, ParticleState};
 use crate::simulation::particles::{HostParticles, Particles};
 use crate::simulation::time_step::{Limit, StabilityBound, TimeStepper};
 use backend::{Backend, ParticleViews, Passes, Schedule};
@@ -149,14 +149,13 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
         let inlets: Vec<Inlet> = scene.inlets.iter().map(|c| Inlet::new(c, s, h, mass, mat.rest_density_kg_m3)).collect();
         let fluid_capacity = scene.simulation.max_fluid_particles.unwrap_or(0).max(initial.fluid.len());
         let boundary_count = initial.boundary.len();
-        let continuity = mat.density_equation == DensityEquation::Continuity;
         let kernels = calibrated_kernels::<R>(mat.rest_density_kg_m3, s, h, mat.density_kernel);
         let shifting = (scene.simulation.particle_shifting > 0.0).then(|| Shifting {
             coefficient: R::from_f64(scene.simulation.particle_shifting * h),
             inverse_spacing_weight: R::ONE / kernels.spiky(R::from_f64(s * s)),
             surface_divergence: R::from_f64(SURFACE_POSITION_DIVERGENCE),
         });
-        let fields = ModelFields { density_rate: continuity, shift: shifting.is_some(), ..M::FIELDS };
+        let fields = M::FIELDS.with_scene(scene);
         let mut particles = Particles::with_capacity(boundary_count + fluid_capacity, fields);
         for (k, &x) in initial.boundary.iter().enumerate() {
             particles.push(k as u32, x, [0.0; 3]);

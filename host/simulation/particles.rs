@@ -1,5 +1,6 @@
 //! Structure-of-arrays particle storage, allocated once to the run's capacity.
 
+use crate::scene::{DensityEquation, Scene};
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::Real;
 
@@ -18,6 +19,18 @@ pub struct ModelFields {
     pub density_rate: bool,
     /// Each fluid particle's shift in this step, where the scene shifts particles.
     pub shift: bool,
+}
+
+impl ModelFields {
+    /// These fields with what `scene` adds to its model's: the density rate where density
+    /// comes from the continuity equation, the shift where particles are shifted.
+    pub fn with_scene(self, scene: &Scene) -> Self {
+        Self {
+            density_rate: scene.material.density_equation == DensityEquation::Continuity,
+            shift: scene.simulation.particle_shifting > 0.0,
+            ..self
+        }
+    }
 }
 
 /// Every per-particle array of a run. Arrays hold `capacity` entries; the first `len` are live.
