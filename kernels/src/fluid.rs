@@ -42,7 +42,7 @@ impl<R: Real> Fluid<R> {
         id < self.boundary_count
     }
 
-    /// The density of fixed boundary particle whose Eq. (5) sum is `summed` (kg/m^3).
+    /// The density of a fixed boundary particle whose Eq. (5) sum is `summed` (kg/m^3).
     #[inline(always)]
     pub fn wall_density(&self, summed: R) -> R {
         summed.max(self.wall_density_floor)
