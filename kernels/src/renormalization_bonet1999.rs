@@ -28,12 +28,7 @@ impl GradientEstimate for Renormalized {
         density: &View<R>,
         fluid: &Fluid<R>,
     ) -> Mat3<R> {
-        match kernel_sums::<R, N, true, false>(i, neighborhood, velocity, density, fluid) {
-            Some((grad, moment)) => match moment.inverse() {
-                Some(inverse) => grad.matmul(inverse),
-                None => grad,
-            },
-            None => Mat3::zero(),
-        }
+        kernel_sums::<R, N, true, false>(i, neighborhood, velocity, density, fluid)
+            .map_or_else(Mat3::zero, |(grad, moment)| moment.inverse().map_or(grad, |inverse| grad.matmul(inverse)))
     }
 }

@@ -18,10 +18,7 @@ pub fn velocity_gradient<R: Real, N: Neighbors>(
     density: &View<R>,
     fluid: &Fluid<R>,
 ) -> Mat3<R> {
-    match kernel_sums::<R, N, false, false>(i, neighborhood, velocity, density, fluid) {
-        Some((grad, _)) => grad,
-        None => Mat3::zero(),
-    }
+    kernel_sums::<R, N, false, false>(i, neighborhood, velocity, density, fluid).map_or_else(Mat3::zero, |(grad, _)| grad)
 }
 
 /// Eq. (8)'s sum and, with `MOMENT`, its moment matrix sum_j (m_j / rho_j) (x_j - x_i) ⊗
@@ -108,10 +105,7 @@ impl GradientEstimate for OwnDensity {
         density: &View<R>,
         fluid: &Fluid<R>,
     ) -> Mat3<R> {
-        match kernel_sums::<R, N, false, true>(i, neighborhood, velocity, density, fluid) {
-            Some((grad, _)) => grad,
-            None => Mat3::zero(),
-        }
+        kernel_sums::<R, N, false, true>(i, neighborhood, velocity, density, fluid).map_or_else(Mat3::zero, |(grad, _)| grad)
     }
 }
 
