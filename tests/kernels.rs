@@ -788,7 +788,14 @@ impl Ball {
         use coil::simulation::particles::{vec3_view, ModelFields};
         use coil_kernels::density::{density_pass, DensityArgs, Poly6};
         use coil_kernels::view::ViewMut;
-        let fields = ModelFields { stress: true, viscosity: true, velocity_gradient: true, density_rate: false, shift: false };
+        let fields = ModelFields {
+            stress: true,
+            viscosity: true,
+            velocity_gradient: true,
+            density_rate: false,
+            shift: false,
+            implicit: false,
+        };
         let in_ball = |x: [f64; 3]| x.map(|c| c - BALL_CENTRE).iter().map(|c| c * c).sum::<f64>().sqrt() <= 3.5 * LATTICE_SPACING;
         let (mut particles, grid, fluid) = sorted_lattice(20, fields, in_ball, |_| [0.0; 3]);
         let fluid = Fluid { sound_speed2: 0.0, ..fluid };

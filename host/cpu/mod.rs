@@ -24,8 +24,14 @@ use coil_kernels::nozzle::{nozzle_pass, nozzle_shift_pass, NozzleArgs, NozzleShi
 use coil_kernels::shifting_sun2017::{shift_pass, shifting_pass, ShiftArgs, ShiftingArgs};
 use coil_kernels::topology::{Open, Periodic, Topology};
 use coil_kernels::velocity_gradient::GradientEstimate;
-use coil_kernels::view::{Vec3View, View};
+use coil_kernels::view::{Vec3View, View, ViewMut};
 use coil_kernels::viscosity::hourglass_ganzenmuller2015::{velocity_gradient_pass, VelocityGradientArgs};
+use coil_kernels::viscosity::implicit_weiler2018::{
+    cg_direction_pass, cg_start_pass, cg_step_pass, dot_pass, implicit_stress_pass, lagged_viscosity_pass, predictor_pass,
+    system_block_pass, system_product_pass, viscous_acceleration_pass, CgDirectionArgs, CgStartArgs, CgStepArgs, DotArgs,
+    ImplicitStressArgs, LaggedViscosityArgs, PredictorArgs, SystemBlockArgs, SystemProductArgs, ViscousAccelerationArgs,
+    DOT_RANGE,
+};
 use coil_kernels::viscosity::laplacian_morris1997::{shear_viscosity_pass, ShearViscosityArgs};
 use coil_kernels::viscosity::stress_andrade2014::{stress_pass, StressArgs};
 use coil_kernels::viscosity::ViscousOperator;
@@ -87,6 +93,7 @@ impl<R: Real> CpuBackend<R> {
             viscosity: p.viscosity.as_mut().map(|v| view_mut(v, n)),
             velocity_gradient: p.velocity_gradient.as_mut().map(|g| mat3_view_mut(g, n)),
             wall_mirror,
+            implicit: p.implicit.as_mut().map(|a| a.views(n)),
         };
         schedule.run(views, &mut CpuPasses { n });
     }
@@ -222,4 +229,45 @@ impl<R: Real, T: Topology, N: Neighbors + Sync> Passes<R, T, N> for CpuPasses {
     fn shift(&mut self, args: ShiftArgs<'_, R, T>) {
         launch(self.n, |i| shift_pass(i, &args));
     }
+    fn predictor(&mut self, args: PredictorArgs<'_, R>) {
+        launch(self.n, |i| predictor_pass(i, &args));
+    }
+    fn lagged_viscosity<Rh: Rheology<R>>(&mut self, args: LaggedViscosityArgs<'_, R, Rh, N>) {
+        launch(self.n, |i| lagged_viscosity_pass(i, &args));
+    }
+    fn implicit_stress(&mut self, args: ImplicitStressArgs<'_, R, N>) {
+        launch(self.n, |i| implicit_stress_pass(i, &args));
+    }
+    fn system_block(&mut self, args: SystemBlockArgs<'_, R, N>) {
+        launch(self.n, |i| system_block_pass(i, &args));
+    }
+    fn system_product(&mut self, args: SystemProductArgs<'_, R, N>) {
+        launch(self.n, |i| system_product_pass(i, &args));
+    }
+    fn cg_start(&mut self, args: CgStartArgs<'_, R>) {
+        launch(self.n, |i| cg_start_pass(i, &args));
+    }
+    fn cg_step(&mut self, args: CgStepArgs<'_, R>) {
+        launch(self.n, |i| cg_step_pass(i, &args));
+    }
+    fn cg_direction(&mut self, args: CgDirectionArgs<'_, R>) {
+        launch(self.n, |i| cg_direction_pass(i, &args));
+    }
+    fn viscous_acceleration(&mut self, args: ViscousAccelerationArgs<'_, R>) {
+        launch(self.n, |i| viscous_acceleration_pass(i, &args));
+    }
+    fn dots(&mut self, args: DotArgs<'_, R>, partial: ViewMut<'_, [f64; 2]>) -> [f64; 2] {
+        let n = self.n;
+        let ranges = n.div_ceil(DOT_RANGE);
+        (0..ranges).into_par_iter().for_each(|r| dot_pass(r, n, &args, partial));
+        sum_in_order(&partial.read(), ranges)
+    }
+}
+
+/// The first `ranges` partial dot products added in range order.
+pub fn sum_in_order(partial: &View<'_, [f64; 2]>, ranges: usize) -> [f64; 2] {
+    (0..ranges).fold([0.0; 2], |[a, b], r| {
+        let [x, y] = partial.at(r);
+        [a + x, b + y]
+    })
 }

@@ -10,7 +10,8 @@
 use super::device_array::{vec3_view, vec3_view_mut, vec3_zeros, DeviceArray, DeviceVec3};
 use super::gpu::{ByValue, CudaError, Gpu};
 use super::scan::scan_chunk_totals;
-use crate::simulation::backend::{Backend, ParticleViews, Passes, Readout, Schedule};
+use crate::cpu::sum_in_order;
+use crate::simulation::backend::{Backend, ImplicitViews, ParticleViews, Passes, Readout, Schedule};
 use crate::simulation::model::Model;
 use crate::simulation::particles::{HostParticles, ModelFields, Particles};
 use crate::simulation::{Setup, Simulation, StepError};
@@ -29,8 +30,12 @@ use coil_kernels::nozzle::{NozzleArgs, NozzleShiftArgs};
 use coil_kernels::shifting_sun2017::{ShiftArgs, ShiftingArgs};
 use coil_kernels::topology::{Periodic, Topology};
 use coil_kernels::velocity_gradient::GradientEstimate;
-use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, View};
+use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, View, ViewMut};
 use coil_kernels::viscosity::hourglass_ganzenmuller2015::VelocityGradientArgs;
+use coil_kernels::viscosity::implicit_weiler2018::{
+    CgDirectionArgs, CgStartArgs, CgStepArgs, DotArgs, ImplicitStressArgs, LaggedViscosityArgs, PredictorArgs, SystemBlockArgs,
+    SystemProductArgs, ViscousAccelerationArgs, DOT_RANGE,
+};
 use coil_kernels::viscosity::laplacian_morris1997::ShearViscosityArgs;
 use coil_kernels::viscosity::stress_andrade2014::StressArgs;
 use coil_kernels::viscosity::ViscousOperator;
@@ -90,6 +95,56 @@ struct DeviceState<R> {
     figures: DeviceArray<StateFigures>,
     /// Wall particles' mirror images by id, under mirrored walls.
     wall_mirror: Option<DeviceVec3<f64>>,
+    /// The implicit viscosity solve's arrays, where viscosity is solved implicitly.
+    implicit: Option<DeviceImplicit<R>>,
+}
+
+/// The implicit viscosity solve's arrays on the device (`particles::ImplicitArrays`).
+struct DeviceImplicit<R> {
+    /// predicted, solution, residual, preconditioned, direction, product.
+    vectors: [DeviceVec3<R>; 6],
+    block: [DeviceArray<R>; 6],
+    partial_dots: DeviceArray<[f64; 2]>,
+}
+
+impl<R: Real> DeviceImplicit<R> {
+    fn new(gpu: &Gpu, capacity: usize) -> Result<Self, CudaError> {
+        let v = || vec3_zeros(gpu, capacity, "implicit viscosity vectors");
+        let b = || DeviceArray::zeros(gpu, capacity, "implicit viscosity blocks");
+        Ok(Self {
+            vectors: [v()?, v()?, v()?, v()?, v()?, v()?],
+            block: [b()?, b()?, b()?, b()?, b()?, b()?],
+            partial_dots: DeviceArray::zeros(gpu, capacity.div_ceil(DOT_RANGE), "partial dot products")?,
+        })
+    }
+
+    fn bytes(&self) -> usize {
+        self.vectors.iter().flatten().map(DeviceArray::bytes).sum::<usize>()
+            + self.block.iter().map(DeviceArray::bytes).sum::<usize>()
+            + self.partial_dots.bytes()
+    }
+
+    fn views(&self, n: usize) -> ImplicitViews<'static, R> {
+        let [xx, yy, zz, xy, xz, yz] = &self.block;
+        let v = |k: usize| vec3_view_mut(&self.vectors[k], n);
+        ImplicitViews {
+            predicted: v(0),
+            solution: v(1),
+            residual: v(2),
+            preconditioned: v(3),
+            direction: v(4),
+            product: v(5),
+            block: SymTensorViewMut {
+                xx: xx.view_mut(n),
+                yy: yy.view_mut(n),
+                zz: zz.view_mut(n),
+                xy: xy.view_mut(n),
+                xz: xz.view_mut(n),
+                yz: yz.view_mut(n),
+            },
+            partial_dots: self.partial_dots.view_mut(n.div_ceil(DOT_RANGE)),
+        }
+    }
 }
 
 impl<R: Real> DeviceState<R> {
@@ -150,6 +205,7 @@ impl<R: Real> DeviceState<R> {
             staged_density: if fields.density_rate { Some(DeviceArray::zeros(gpu, staged, "inlet layers")?) } else { None },
             figures: DeviceArray::zeros(gpu, capacity.div_ceil(DIAGNOSTICS_RANGE), "diagnostics")?,
             wall_mirror: None,
+            implicit: if fields.implicit { Some(DeviceImplicit::new(gpu, capacity)?) } else { None },
         })
     }
 
@@ -184,6 +240,7 @@ impl<R: Real> DeviceState<R> {
             + self.staged_density.as_ref().map_or(0, DeviceArray::bytes)
             + self.figures.bytes()
             + self.wall_mirror.as_ref().map_or(0, v3)
+            + self.implicit.as_ref().map_or(0, DeviceImplicit::bytes)
     }
 
     fn stress_view(&self, n: usize) -> Option<SymTensorViewMut<'static, R>> {
@@ -226,6 +283,8 @@ struct GpuPasses<'g> {
     count: View<'static, u32>,
     threads: u32,
     result: Result<(), CudaError>,
+    /// The implicit solve's partial dot products on the device, and their host copy.
+    partial_dots: Option<(&'g DeviceArray<[f64; 2]>, &'g mut [[f64; 2]])>,
 }
 
 impl GpuPasses<'_> {
@@ -277,6 +336,55 @@ impl<R: Real, T: Topology> Passes<R, T, Neighborhood<'static, T>> for GpuPasses<
     fn shift(&mut self, args: ShiftArgs<'_, R, T>) {
         self.run(kernel::<R>("shift", "", T::NAME), args);
     }
+    fn predictor(&mut self, args: PredictorArgs<'_, R>) {
+        self.run(kernel::<R>("predictor", "", ""), args);
+    }
+    fn lagged_viscosity<Rh: Rheology<R>>(&mut self, args: LaggedViscosityArgs<'_, R, Rh, Neighborhood<'static, T>>) {
+        self.run(kernel::<R>("lagged_viscosity", Rh::NAME, T::NAME), args);
+    }
+    fn implicit_stress(&mut self, args: ImplicitStressArgs<'_, R, Neighborhood<'static, T>>) {
+        self.run(kernel::<R>("implicit_stress", "", T::NAME), args);
+    }
+    fn system_block(&mut self, args: SystemBlockArgs<'_, R, Neighborhood<'static, T>>) {
+        self.run(kernel::<R>("system_block", "", T::NAME), args);
+    }
+    fn system_product(&mut self, args: SystemProductArgs<'_, R, Neighborhood<'static, T>>) {
+        self.run(kernel::<R>("system_product", "", T::NAME), args);
+    }
+    fn cg_start(&mut self, args: CgStartArgs<'_, R>) {
+        self.run(kernel::<R>("cg_start", "", ""), args);
+    }
+    fn cg_step(&mut self, args: CgStepArgs<'_, R>) {
+        self.run(kernel::<R>("cg_step", "", ""), args);
+    }
+    fn cg_direction(&mut self, args: CgDirectionArgs<'_, R>) {
+        self.run(kernel::<R>("cg_direction", "", ""), args);
+    }
+    fn viscous_acceleration(&mut self, args: ViscousAccelerationArgs<'_, R>) {
+        self.run(kernel::<R>("viscous_acceleration", "", ""), args);
+    }
+    /// Waits for the device: the solve's next step depends on the sums.
+    fn dots(&mut self, args: DotArgs<'_, R>, partial: ViewMut<'_, [f64; 2]>) -> [f64; 2] {
+        let ranges = partial.len();
+        if self.result.is_ok() {
+            // SAFETY: dots_<R>(count, args, out), `out` holding one pair per range.
+            self.result = unsafe {
+                self.gpu.launch(
+                    kernel::<R>("dots", "", ""),
+                    ranges as u32,
+                    &[&ByValue(self.count), &ByValue(args), &ByValue(partial)],
+                )
+            };
+        }
+        let (device, host) = self.partial_dots.as_mut().expect("the implicit solve allocates its partial dot products");
+        if self.result.is_ok() {
+            self.result = device.download(self.gpu, &mut host[..ranges]);
+        }
+        match self.result {
+            Ok(()) => sum_in_order(&View::new(&host[..ranges]), ranges),
+            Err(_) => [f64::NAN; 2],
+        }
+    }
 }
 
 /// A run on the device.
@@ -318,6 +426,8 @@ pub struct CudaBackend<R: Real> {
     /// Steps between reads of the diagnostics.
     pub check_every: u64,
     figures: Vec<StateFigures>,
+    /// The host's copy of the implicit solve's partial dot products.
+    partial_dots: Vec<[f64; 2]>,
 }
 
 impl<R: Real> CudaBackend<R> {
@@ -345,6 +455,7 @@ impl<R: Real> CudaBackend<R> {
             bound: host.particles.len(),
             staged: Particles::with_capacity(staged, ModelFields::default()),
             figures: vec![StateFigures::default(); device.figures.len()],
+            partial_dots: vec![[0.0; 2]; device.implicit.as_ref().map_or(0, |i| i.partial_dots.len())],
             mirror: host,
             gpu,
             device,
@@ -591,8 +702,11 @@ impl<R: Real> Backend<R> for CudaBackend<R> {
                 .as_ref()
                 .map(|g| Mat3ViewMut { rows: [vec3_view_mut(&g[0], n), vec3_view_mut(&g[1], n), vec3_view_mut(&g[2], n)] }),
             wall_mirror: d.wall_mirror.as_ref().map(|m| vec3_view(m, m[0].len())),
+            implicit: d.implicit.as_ref().map(|i| i.views(n)),
         };
-        let mut passes = GpuPasses { gpu: &mut self.gpu, count: d.count.view(1), threads: n as u32, result: Ok(()) };
+        let partial_dots = d.implicit.as_ref().map(|i| (&i.partial_dots, &mut self.partial_dots[..]));
+        let mut passes =
+            GpuPasses { gpu: &mut self.gpu, count: d.count.view(1), threads: n as u32, result: Ok(()), partial_dots };
         schedule.run(views, &mut passes);
         passes.result
     }

@@ -38,8 +38,9 @@ impl Progress {
         }
         self.last_report = Instant::now();
         let rate = (sim.steps - self.start_steps) as f64 / wall.as_secs_f64().max(1e-9);
+        let solve = sim.solves.last.map_or(String::new(), |s| format!(" | {} CG iterations", s.iterations));
         let line = format!(
-            "t = {:.4}/{end} s | {rate:.0} steps/s | {} fluid particles{} | dt {:.2e} s ({})",
+            "t = {:.4}/{end} s | {rate:.0} steps/s | {} fluid particles{} | dt {:.2e} s ({}){solve}",
             sim.time,
             sim.fluid_count(),
             if sim.capacity_reached_at.is_some() { " (capacity full: inlets wait)" } else { "" },

@@ -23,9 +23,24 @@ pub struct Summary {
     /// When (s) the fluid capacity (`simulation.max_fluid_particles`) stopped the inlets, and
     /// that capacity.
     pub capacity_reached: Option<(f64, usize)>,
+    /// The implicit viscosity solves of this process's steps, where viscosity is solved
+    /// implicitly.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub implicit_viscosity: Option<ImplicitSolves>,
     /// The `.pvd` series that ParaView opens, where the run writes `.vtu` frames.
     #[serde(skip)]
     pub series: Option<PathBuf>,
+}
+
+/// The implicit viscosity solves of a run and their settings.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ImplicitSolves {
+    pub mean_iterations: f64,
+    pub largest_iterations: u32,
+    /// Steps whose solve stopped above its tolerance.
+    pub unconverged_steps: u64,
+    pub tolerance: f64,
+    pub max_iterations: u32,
 }
 
 impl fmt::Display for Summary {
@@ -38,6 +53,13 @@ impl fmt::Display for Summary {
         writeln!(f, "max compression        {:.3e} ((rho-rho0)/rho0)", self.max_compression)?;
         writeln!(f, "max speed              {:.4} m/s (Mach {:.3})", self.max_speed_m_s, self.max_mach)?;
         writeln!(f, "removed (left domain)  {}", self.removed)?;
+        if let Some(s) = &self.implicit_viscosity {
+            writeln!(
+                f,
+                "implicit viscosity     {:.1} iterations a step on average, {} at most (tolerance {:.0e}, at most {}); {} step(s) unconverged",
+                s.mean_iterations, s.largest_iterations, s.tolerance, s.max_iterations, s.unconverged_steps
+            )?;
+        }
         write!(f, "frames                 {}", self.frames)?;
         if let Some((t, capacity)) = self.capacity_reached {
             write!(

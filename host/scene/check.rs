@@ -250,7 +250,11 @@ pub fn check(scene: &Scene, file: &str, precision: Option<Precision>, calibratio
     // Eq. (10) from the scene's own f64 values: an f32 run rounds nu0 first, which moves its
     // bound in the eighth digit.
     let v = &scene.material.viscosity;
-    let bound = StabilityBound::new(scene.support_radius(), scene.material.sound_speed_m_s, v.nu0_m2_s.max(v.nu_inf()));
+    let bound = StabilityBound::new(
+        scene.support_radius(),
+        scene.material.sound_speed_m_s,
+        v.bounding_viscosity(v.nu0_m2_s.max(v.nu_inf())),
+    );
     let (dt, limit) = TimeStepper { bound, ..plan.stepper }.next(0.0);
     let end = scene.simulation.end_time_s;
     let steps = (end / dt).ceil();

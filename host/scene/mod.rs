@@ -237,6 +237,83 @@ pub struct Viscosity {
     /// fingerprint.
     #[serde(default, skip_serializing_if = "VelocityGradient::is_sph")]
     pub velocity_gradient: VelocityGradient,
+    /// Whether viscosity is integrated explicitly, as the paper does (its Eq. (10) then bounds
+    /// dt), or implicitly by backward Euler, which lifts that bound. Left out of the resolved
+    /// scene at its default.
+    #[serde(default, skip_serializing_if = "ViscositySolver::is_explicit")]
+    pub solver: ViscositySolver,
+    /// The implicit solve's settings (read only with `solver = "implicit"`).
+    #[serde(default, skip_serializing_if = "ImplicitViscosity::is_default")]
+    pub implicit: ImplicitViscosity,
+}
+
+/// How viscosity is integrated in time.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ViscositySolver {
+    /// Explicitly, with the rest of Algorithm 1; Eq. (10)'s viscous term bounds dt.
+    #[default]
+    Explicit,
+    /// By backward Euler, solved with conjugate gradients (Weiler et al. 2018) on the paper's
+    /// operator with the own-density velocity gradient; dt is bounded by sound and flow speed
+    /// only.
+    Implicit,
+}
+
+impl ViscositySolver {
+    fn is_explicit(&self) -> bool {
+        *self == ViscositySolver::Explicit
+    }
+}
+
+/// Settings of the implicit viscosity solve.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ImplicitViscosity {
+    /// The solve stops when the residual's norm falls below this fraction of its first norm,
+    /// the velocity change an explicit step would make (dimensionless, 0 to 1).
+    #[serde(default = "default_implicit_tolerance")]
+    pub tolerance: f64,
+    /// Conjugate-gradient iterations a step may take at most.
+    #[serde(default = "default_implicit_iterations")]
+    pub max_iterations: u32,
+    /// What a step does when the solve has not met its tolerance within `max_iterations`:
+    /// stop the run with a diagnosis (frames kept), or go on and count it in the summary.
+    #[serde(default)]
+    pub on_no_convergence: NoConvergence,
+}
+
+/// What a step does with a solve that did not converge.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum NoConvergence {
+    #[default]
+    Stop,
+    Warn,
+}
+
+fn default_implicit_tolerance() -> f64 {
+    1e-3
+}
+
+fn default_implicit_iterations() -> u32 {
+    100
+}
+
+impl Default for ImplicitViscosity {
+    fn default() -> Self {
+        Self {
+            tolerance: default_implicit_tolerance(),
+            max_iterations: default_implicit_iterations(),
+            on_no_convergence: NoConvergence::Stop,
+        }
+    }
+}
+
+impl ImplicitViscosity {
+    fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
 }
 
 /// The velocity gradient the paper's operator reads (Eq. (8), then (2) and (9)).
@@ -270,6 +347,14 @@ fn one() -> f64 {
 impl Viscosity {
     pub fn nu_inf(&self) -> f64 {
         self.nu_inf_m2_s.unwrap_or(self.nu0_m2_s)
+    }
+    /// The viscosity of Eq. (10)'s viscous term (m^2/s) for a law whose largest is `largest`:
+    /// none where viscosity is solved implicitly, which that term no longer bounds.
+    pub fn bounding_viscosity(&self, largest: f64) -> f64 {
+        match self.solver {
+            ViscositySolver::Explicit => largest,
+            ViscositySolver::Implicit => 0.0,
+        }
     }
     /// K = 0 (or nu_inf = nu0) is a Newtonian fluid: the Cross model is never evaluated.
     pub fn is_newtonian(&self) -> bool {

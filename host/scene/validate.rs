@@ -3,9 +3,14 @@
 
 use super::{
     short, Boundary, Domain, Material, Nozzle, NozzleMotion, Output, Scene, SceneError, VelocityGradient, ViscosityOperator,
+    ViscositySolver, Walls,
 };
 use super::{Precision, SimulationSettings, MAX_HOURGLASS_CONTROL, MAX_PARTICLE_SHIFTING};
 use crate::simulation::time_step::{Limit, StabilityBound};
+
+/// Iterations an implicit solve may be allowed: a solve needing more at the chosen dt is
+/// better served by a smaller dt.
+const MAX_IMPLICIT_ITERATIONS: u32 = 10_000;
 use toml::Value;
 
 /// Rest densities a scene may give (kg/m^3): from a thin gas to past any liquid, so that the
@@ -214,6 +219,29 @@ impl Check<'_> {
                     .into(),
             );
         }
+        if v.solver == ViscositySolver::Implicit {
+            if v.operator != ViscosityOperator::Stress || v.velocity_gradient != VelocityGradient::OwnDensity {
+                return self.fail(
+                    "material.viscosity.solver",
+                    "\"implicit\" solves the paper's operator with velocity_gradient = \"own_density\" (operator = \"stress\"), \
+                     the form whose matrix is symmetric, as conjugate gradients need; set those, or solver = \"explicit\""
+                        .into(),
+                );
+            }
+            let t = v.implicit.tolerance;
+            if !(t > 0.0 && t < 1.0) {
+                return self.fail(
+                    "material.viscosity.implicit.tolerance",
+                    format!("must be above 0 and below 1 (a fraction of the first residual; 1e-3 is the default), got {t}"),
+                );
+            }
+            if !(1..=MAX_IMPLICIT_ITERATIONS).contains(&v.implicit.max_iterations) {
+                return self.fail(
+                    "material.viscosity.implicit.max_iterations",
+                    format!("must be from 1 to {MAX_IMPLICIT_ITERATIONS}, got {}", v.implicit.max_iterations),
+                );
+            }
+        }
         Ok(())
     }
 
@@ -259,6 +287,14 @@ impl Check<'_> {
     /// `h`: the support radius (m).
     fn simulation(&self, s: &SimulationSettings, m: &Material, h: f64) -> Checked {
         self.positive("simulation.end_time_s", s.end_time_s)?;
+        if s.walls == Walls::Mirrored && m.viscosity.solver == ViscositySolver::Implicit {
+            return self.fail(
+                "simulation.walls",
+                "\"mirrored\" walls make the implicit viscosity operator non-symmetric, which conjugate gradients cannot solve; \
+                 use walls = \"paper\" or material.viscosity.solver = \"explicit\""
+                    .into(),
+            );
+        }
         self.within(
             "simulation.particle_shifting",
             s.particle_shifting,
@@ -279,7 +315,8 @@ impl Check<'_> {
         }
         if let Some(dt) = ts.fixed_s {
             self.positive("simulation.time_step.fixed_s", dt)?;
-            let (limit_dt, limit) = StabilityBound::new(h, m.sound_speed_m_s, m.viscosity.nu0_m2_s).dt();
+            let (limit_dt, limit) =
+                StabilityBound::new(h, m.sound_speed_m_s, m.viscosity.bounding_viscosity(m.viscosity.nu0_m2_s)).dt();
             if dt > limit_dt && !ts.allow_above_stability_bound {
                 return self.fail(
                     "simulation.time_step.fixed_s",
@@ -524,7 +561,7 @@ fn largest_dt(s: &SimulationSettings, m: &Material, h: f64) -> (f64, Limit) {
         Some(dt) => (dt, Limit::Fixed),
         None => {
             let v = &m.viscosity;
-            let (dt, limit) = StabilityBound::new(h, m.sound_speed_m_s, v.nu0_m2_s.max(v.nu_inf())).dt();
+            let (dt, limit) = StabilityBound::new(h, m.sound_speed_m_s, v.bounding_viscosity(v.nu0_m2_s.max(v.nu_inf()))).dt();
             (dt * s.time_step.safety_factor, limit)
         }
     }

@@ -20,6 +20,10 @@ use coil_kernels::topology::{Periodic, Topology};
 use coil_kernels::velocity_gradient::GradientEstimate;
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::viscosity::hourglass_ganzenmuller2015::VelocityGradientArgs;
+use coil_kernels::viscosity::implicit_weiler2018::{
+    CgDirectionArgs, CgStartArgs, CgStepArgs, DotArgs, ImplicitStressArgs, LaggedViscosityArgs, PredictorArgs, SystemBlockArgs,
+    SystemProductArgs, ViscousAccelerationArgs,
+};
 use coil_kernels::viscosity::laplacian_morris1997::ShearViscosityArgs;
 use coil_kernels::viscosity::stress_andrade2014::StressArgs;
 use coil_kernels::viscosity::ViscousOperator;
@@ -42,6 +46,19 @@ pub trait Passes<R: Real, T: Topology, N: Neighbors> {
     fn shifting(&mut self, args: ShiftingArgs<'_, R, N>);
     fn nozzle_shift(&mut self, args: NozzleShiftArgs<'_, R>);
     fn shift(&mut self, args: ShiftArgs<'_, R, T>);
+    fn predictor(&mut self, args: PredictorArgs<'_, R>);
+    fn lagged_viscosity<Rh: Rheology<R>>(&mut self, args: LaggedViscosityArgs<'_, R, Rh, N>);
+    fn implicit_stress(&mut self, args: ImplicitStressArgs<'_, R, N>);
+    fn system_block(&mut self, args: SystemBlockArgs<'_, R, N>);
+    fn system_product(&mut self, args: SystemProductArgs<'_, R, N>);
+    fn cg_start(&mut self, args: CgStartArgs<'_, R>);
+    fn cg_step(&mut self, args: CgStepArgs<'_, R>);
+    fn cg_direction(&mut self, args: CgDirectionArgs<'_, R>);
+    fn viscous_acceleration(&mut self, args: ViscousAccelerationArgs<'_, R>);
+    /// The two dot products of `args` over the live particles, their ranges' parts written to
+    /// `partial` and added in range order: the same on every backend and thread count. A
+    /// backend that failed returns NaN and reports the fault when the schedule ends.
+    fn dots(&mut self, args: DotArgs<'_, R>, partial: ViewMut<'_, [f64; 2]>) -> [f64; 2];
 }
 
 /// A backend's particle buffers as views over its own memory, live particles only, in the
@@ -76,6 +93,22 @@ pub struct ParticleViews<'a, R, T, N> {
     pub velocity_gradient: Option<Mat3ViewMut<'a, R>>,
     /// Each wall particle's mirror image (m) by id, under mirrored walls.
     pub wall_mirror: Option<Vec3View<'a, f64>>,
+    /// Present where viscosity is solved implicitly.
+    pub implicit: Option<ImplicitViews<'a, R>>,
+}
+
+/// The implicit viscosity solve's arrays as views (`coil_kernels::viscosity::implicit_weiler2018`).
+#[derive(Clone, Copy)]
+pub struct ImplicitViews<'a, R> {
+    pub predicted: Vec3ViewMut<'a, R>,
+    pub solution: Vec3ViewMut<'a, R>,
+    pub residual: Vec3ViewMut<'a, R>,
+    pub preconditioned: Vec3ViewMut<'a, R>,
+    pub direction: Vec3ViewMut<'a, R>,
+    pub product: Vec3ViewMut<'a, R>,
+    pub block: SymTensorViewMut<'a, R>,
+    /// One entry per range of `DOT_RANGE` particles.
+    pub partial_dots: ViewMut<'a, [f64; 2]>,
 }
 
 /// A sequence of passes over a backend's views, generic over how it visits neighbors: a

@@ -2,6 +2,7 @@
 //! through Algorithm 1 by one schedule that every backend runs.
 
 pub mod backend;
+pub mod implicit_viscosity;
 pub mod inlet;
 pub mod model;
 pub mod particles;
@@ -11,9 +12,9 @@ pub mod time_step;
 use crate::cpu::neighbor_grid::NeighborGrid;
 use crate::cpu::CpuBackend;
 use crate::scene::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, InitialParticles};
-use crate::scene::{DensityKernelKind, Scene, ViscousVelocity, Walls};
+use crate::scene::{DensityKernelKind, ImplicitViscosity, Scene, ViscositySolver, ViscousVelocity, Walls};
 use crate::simulation::inlet::Inlet;
-use crate::simulation::model::{Model, ParticleState};
+use crate::simulation::model::{ImplicitStep, Model, ParticleState, SolveReport};
 use crate::simulation::particles::{HostParticles, Particles};
 use crate::simulation::time_step::{Limit, StabilityBound, TimeStepper};
 use backend::{Backend, ParticleViews, Passes, Schedule};
@@ -54,10 +55,20 @@ pub struct Instability {
     /// The first non-finite value a frame would have held (field, particle id, value), where
     /// that is what stopped the run.
     pub non_finite: Option<String>,
+    /// The implicit viscosity solve that missed its tolerance, and its settings, where that is
+    /// what stopped the run.
+    pub unconverged_solve: Option<(SolveReport, ImplicitViscosity)>,
 }
 
 impl fmt::Display for Instability {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some((report, settings)) = &self.unconverged_solve {
+            return write!(
+                f,
+                "the implicit viscosity solve did not converge at step {} (t = {:.6e} s, dt = {:.3e} s): after {} iterations its residual was {:.3e} of its first, above the tolerance {:.1e}. Raise material.viscosity.implicit.max_iterations, lower dt (simulation.time_step.safety_factor or fixed_s), or set material.viscosity.implicit.on_no_convergence = \"warn\" to go on and count such steps.",
+                self.step, self.time_s, self.dt_s, report.iterations, report.relative_residual, settings.tolerance
+            );
+        }
         match &self.non_finite {
             Some(what) => write!(
                 f,
@@ -181,7 +192,11 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
         };
         let ts = &scene.simulation.time_step;
         let stepper = TimeStepper {
-            bound: StabilityBound::new(h, mat.sound_speed_m_s, model.law().max_viscosity().to_f64()),
+            bound: StabilityBound::new(
+                h,
+                mat.sound_speed_m_s,
+                mat.viscosity.bounding_viscosity(model.law().max_viscosity().to_f64()),
+            ),
             support_radius: h,
             safety_factor: ts.safety_factor,
             fixed: ts.fixed_s,
@@ -216,6 +231,8 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
             density_diffusivity: R::from_f64(mat.density_diffusion * 0.5 * h * mat.sound_speed_m_s),
             viscous_velocity: ts.viscous_velocity,
             shifting,
+            implicit: (mat.viscosity.solver == ViscositySolver::Implicit).then_some(mat.viscosity.implicit),
+            solves: Default::default(),
         };
         let wall_mirror = (scene.simulation.walls == Walls::Mirrored)
             .then(|| [0, 1, 2].map(|a| initial.boundary_mirror.iter().map(|m| m[a]).collect()));
@@ -295,8 +312,13 @@ impl<R: Real, M: Model<R>, B: Backend<R>> Simulation<R, M, B> {
             self.run.count_removed(removed);
             // Lines 5-19: density and pressure, stress, accelerations, nozzles, leap-frog.
             let kick_dt = self.run.kick_dt(dt);
-            in_topology(&mut self.backend, ForcesAndMotion { run: &self.run, dt, kick_dt }).map_err(StepError::Backend)?;
+            let mut solve = None;
+            let forces = ForcesAndMotion { run: &self.run, dt, kick_dt, solve: &mut solve };
+            in_topology(&mut self.backend, forces).map_err(StepError::Backend)?;
             self.run.advance_clock(dt, limit);
+            if let Some(report) = solve {
+                self.run.record_solve(report)?;
+            }
             if self.backend.diagnostics_due(self.run.steps) {
                 self.read_diagnostics()?;
             }
@@ -398,6 +420,8 @@ struct ForcesAndMotion<'r, R: Real, M: Model<R>> {
     dt: f64,
     /// Leap-frog's kick (s).
     kick_dt: f64,
+    /// How the implicit viscosity solve went, where there is one.
+    solve: &'r mut Option<SolveReport>,
 }
 
 impl<R: Real, M: Model<R>> Schedule<R> for ForcesAndMotion<'_, R, M> {
@@ -421,7 +445,7 @@ impl<R: Real, M: Model<R>> Schedule<R> for ForcesAndMotion<'_, R, M> {
             });
         }
         // Lines 9-16: velocity gradient and stress, accelerations.
-        run.model.accelerations(
+        *self.solve = run.model.accelerations(
             passes,
             ParticleState {
                 neighborhood: v.neighbors,
@@ -433,6 +457,12 @@ impl<R: Real, M: Model<R>> Schedule<R> for ForcesAndMotion<'_, R, M> {
                 viscosity: v.viscosity,
                 velocity_gradient: v.velocity_gradient,
                 acceleration: v.acceleration,
+                implicit: v.implicit.map(|arrays| ImplicitStep {
+                    kick_dt: R::from_f64(self.kick_dt),
+                    velocity_half: v.velocity_half.read(),
+                    velocity: v.velocity.read(),
+                    arrays,
+                }),
             },
         );
         // Fluid inside a nozzle's tube moves with the jet (paper Sec. III-C; see `nozzle`).

@@ -4,8 +4,9 @@
 //! shear-thinning one per particle. Each is a type, so the CPU loops and the GPU kernels of a run contain only the
 //! physics it uses.
 
-use crate::scene::{Precision, Scene, VelocityGradient, Viscosity, ViscosityOperator};
-use crate::simulation::backend::Passes;
+use crate::scene::{Precision, Scene, VelocityGradient, Viscosity, ViscosityOperator, ViscositySolver};
+use crate::simulation::backend::{ImplicitViews, Passes};
+use crate::simulation::implicit_viscosity::ImplicitStressModel;
 pub use crate::simulation::particles::ModelFields;
 use coil_kernels::acceleration::AccelerationArgs;
 use coil_kernels::cell_grid::{Neighborhood, Neighbors};
@@ -35,8 +36,36 @@ pub trait Model<R: Real>: Copy + Send + Sync + 'static {
     /// How the run estimates velocity gradients (its own, and the shear rate of output frames).
     type Gradient: GradientEstimate;
     /// Velocity gradient and stress (when used), then accelerations, for all particles of
-    /// `state`, run by `backend`, visiting neighbors through `N`.
-    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, state: ParticleState<'_, R, N>);
+    /// `state`, run by `backend`, visiting neighbors through `N`; with the implicit solve, how
+    /// it went.
+    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(
+        &self,
+        backend: &mut P,
+        state: ParticleState<'_, R, N>,
+    ) -> Option<SolveReport>;
+}
+
+/// How one step's implicit viscosity solve went.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolveReport {
+    /// Conjugate-gradient iterations.
+    pub iterations: u32,
+    /// The last residual's norm over the first's.
+    pub relative_residual: f64,
+    /// Whether the residual met the tolerance.
+    pub converged: bool,
+}
+
+/// What the implicit solve reads beyond the explicit operators' state.
+#[derive(Clone, Copy)]
+pub struct ImplicitStep<'a, R> {
+    /// Leap-frog's kick (s).
+    pub kick_dt: R,
+    /// v_{n-1/2} (m/s).
+    pub velocity_half: Vec3View<'a, R>,
+    /// The full-step velocity, which boundary particles keep (m/s).
+    pub velocity: Vec3View<'a, R>,
+    pub arrays: ImplicitViews<'a, R>,
 }
 
 /// What the acceleration passes read and write, as views a backend built over its own memory.
@@ -55,6 +84,8 @@ pub struct ParticleState<'a, R, N = Neighborhood<'a, Open>> {
     /// Present when the model uses the velocity gradient (`Model::FIELDS`).
     pub velocity_gradient: Option<Mat3ViewMut<'a, R>>,
     pub acceleration: Vec3ViewMut<'a, R>,
+    /// Present where viscosity is solved implicitly.
+    pub implicit: Option<ImplicitStep<'a, R>>,
 }
 
 impl<'a, R: Real, N: Neighbors> ParticleState<'a, R, N> {
@@ -82,6 +113,14 @@ pub fn with_model<R: Real, W: WithModel>(scene: &Scene, work: W) -> W::Output {
     let v = &scene.material.viscosity;
     let nu0 = R::from_f64(v.nu0_m2_s);
     let hourglass = R::from_f64(v.hourglass_control);
+    if v.solver == ViscositySolver::Implicit {
+        let (tolerance, max_iterations) = (v.implicit.tolerance, v.implicit.max_iterations);
+        return if v.is_newtonian() {
+            work.with::<R, _>(ImplicitStressModel { rheology: Newtonian { nu0 }, tolerance, max_iterations })
+        } else {
+            work.with::<R, _>(ImplicitStressModel { rheology: cross_law(v), tolerance, max_iterations })
+        };
+    }
     match (v.operator, v.is_newtonian()) {
         (ViscosityOperator::Stress, true) if v.hourglass_control > 0.0 => {
             work.with::<R, _>(HourglassStressModel { rheology: Newtonian { nu0 }, coefficient: hourglass })
@@ -150,14 +189,24 @@ pub struct MorrisModel<R>(pub Newtonian<R>);
 pub struct ShearThinningMorrisModel<Rh>(pub Rh);
 
 impl<R: Real, Rh: Rheology<R> + 'static, G: GradientEstimate> Model<R> for StressModel<Rh, G> {
-    const FIELDS: ModelFields =
-        ModelFields { stress: true, viscosity: false, velocity_gradient: false, density_rate: false, shift: false };
+    const FIELDS: ModelFields = ModelFields {
+        stress: true,
+        viscosity: false,
+        velocity_gradient: false,
+        density_rate: false,
+        shift: false,
+        implicit: false,
+    };
     type Law = Rh;
     fn law(&self) -> Self::Law {
         self.0
     }
     type Gradient = G;
-    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
+    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(
+        &self,
+        backend: &mut P,
+        s: ParticleState<'_, R, N>,
+    ) -> Option<SolveReport> {
         let stress = s.stress.expect("the stress operator allocates stress");
         backend.stress(StressArgs {
             neighborhood: s.neighborhood,
@@ -169,18 +218,29 @@ impl<R: Real, Rh: Rheology<R> + 'static, G: GradientEstimate> Model<R> for Stres
             stress,
         });
         backend.acceleration(s.acceleration_args(StressDivergence { stress: stress.read() }));
+        None
     }
 }
 
 impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for HourglassStressModel<Rh, R> {
-    const FIELDS: ModelFields =
-        ModelFields { stress: false, viscosity: true, velocity_gradient: true, density_rate: false, shift: false };
+    const FIELDS: ModelFields = ModelFields {
+        stress: false,
+        viscosity: true,
+        velocity_gradient: true,
+        density_rate: false,
+        shift: false,
+        implicit: false,
+    };
     type Law = Rh;
     fn law(&self) -> Self::Law {
         self.rheology
     }
     type Gradient = KernelSum;
-    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
+    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(
+        &self,
+        backend: &mut P,
+        s: ParticleState<'_, R, N>,
+    ) -> Option<SolveReport> {
         let gradient = s.velocity_gradient.expect("hourglass control allocates the velocity gradient");
         let viscosity = s.viscosity.expect("hourglass control allocates viscosity");
         backend.velocity_gradient(VelocityGradientArgs {
@@ -198,45 +258,78 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for HourglassStressModel<Rh, R
             gradient: gradient.read(),
             viscosity: viscosity.read(),
         }));
+        None
     }
 }
 
 impl<R: Real> Model<R> for LaplacianModel<R> {
-    const FIELDS: ModelFields =
-        ModelFields { stress: false, viscosity: false, velocity_gradient: false, density_rate: false, shift: false };
+    const FIELDS: ModelFields = ModelFields {
+        stress: false,
+        viscosity: false,
+        velocity_gradient: false,
+        density_rate: false,
+        shift: false,
+        implicit: false,
+    };
     type Law = Newtonian<R>;
     fn law(&self) -> Self::Law {
         self.0
     }
     type Gradient = KernelSum;
-    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
+    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(
+        &self,
+        backend: &mut P,
+        s: ParticleState<'_, R, N>,
+    ) -> Option<SolveReport> {
         let mu0 = self.0.nu0 * s.fluid.rest_density;
         backend.acceleration(s.acceleration_args(VelocityLaplacian { mu0, velocity: s.velocity }));
+        None
     }
 }
 
 impl<R: Real> Model<R> for MorrisModel<R> {
-    const FIELDS: ModelFields =
-        ModelFields { stress: false, viscosity: false, velocity_gradient: false, density_rate: false, shift: false };
+    const FIELDS: ModelFields = ModelFields {
+        stress: false,
+        viscosity: false,
+        velocity_gradient: false,
+        density_rate: false,
+        shift: false,
+        implicit: false,
+    };
     type Law = Newtonian<R>;
     fn law(&self) -> Self::Law {
         self.0
     }
     type Gradient = KernelSum;
-    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
+    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(
+        &self,
+        backend: &mut P,
+        s: ParticleState<'_, R, N>,
+    ) -> Option<SolveReport> {
         backend.acceleration(s.acceleration_args(MorrisViscosity { velocity: s.velocity, viscosity: self.0 }));
+        None
     }
 }
 
 impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for ShearThinningMorrisModel<Rh> {
-    const FIELDS: ModelFields =
-        ModelFields { stress: false, viscosity: true, velocity_gradient: false, density_rate: false, shift: false };
+    const FIELDS: ModelFields = ModelFields {
+        stress: false,
+        viscosity: true,
+        velocity_gradient: false,
+        density_rate: false,
+        shift: false,
+        implicit: false,
+    };
     type Law = Rh;
     fn law(&self) -> Self::Law {
         self.0
     }
     type Gradient = KernelSum;
-    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(&self, backend: &mut P, s: ParticleState<'_, R, N>) {
+    fn accelerations<T: Topology, N: Neighbors, P: Passes<R, T, N>>(
+        &self,
+        backend: &mut P,
+        s: ParticleState<'_, R, N>,
+    ) -> Option<SolveReport> {
         let viscosity = s.viscosity.expect("the shear-thinning Morris operator allocates viscosity");
         backend.shear_viscosity(ShearViscosityArgs {
             neighborhood: s.neighborhood,
@@ -247,5 +340,6 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for ShearThinningMorrisModel<R
             viscosity,
         });
         backend.acceleration(s.acceleration_args(MorrisViscosity { velocity: s.velocity, viscosity: viscosity.read() }));
+        None
     }
 }

@@ -1,7 +1,9 @@
 //! Structure-of-arrays particle storage, allocated once to the run's capacity.
 
 use crate::scene::{DensityEquation, Scene};
+use crate::simulation::backend::ImplicitViews;
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
+use coil_kernels::viscosity::implicit_weiler2018::DOT_RANGE;
 use coil_kernels::Real;
 
 /// The per-particle arrays a physics variant needs beyond the particles' state.
@@ -19,6 +21,8 @@ pub struct ModelFields {
     pub density_rate: bool,
     /// Each fluid particle's shift in this step, where the scene shifts particles.
     pub shift: bool,
+    /// The implicit viscosity solve's vectors and preconditioner blocks.
+    pub implicit: bool,
 }
 
 impl ModelFields {
@@ -29,6 +33,56 @@ impl ModelFields {
             density_rate: scene.material.density_equation == DensityEquation::Continuity,
             shift: scene.simulation.particle_shifting > 0.0,
             ..self
+        }
+    }
+}
+
+/// The implicit viscosity solve's per-particle arrays (`coil_kernels::viscosity::implicit_weiler2018`).
+pub struct ImplicitArrays<R> {
+    /// v* (m/s).
+    pub predicted: [Vec<R>; 3],
+    /// The solve's iterate, the new half-step velocity (m/s).
+    pub solution: [Vec<R>; 3],
+    pub residual: [Vec<R>; 3],
+    pub preconditioned: [Vec<R>; 3],
+    pub direction: [Vec<R>; 3],
+    /// (I - dt A) times the search direction.
+    pub product: [Vec<R>; 3],
+    /// Diagonal blocks of I - dt A: xx, yy, zz, xy, xz, yz.
+    pub block: [Vec<R>; 6],
+    /// One pair of partial dot products per range of `DOT_RANGE` particles.
+    pub partial_dots: Vec<[f64; 2]>,
+}
+
+impl<R: Real> ImplicitArrays<R> {
+    /// Six vectors and a symmetric block per particle, and a share of the partial dots.
+    pub const BYTES_PER_PARTICLE: usize = (6 * 3 + 6) * std::mem::size_of::<R>();
+
+    fn with_capacity(capacity: usize) -> Self {
+        let v3 = || core::array::from_fn(|_| zeros(capacity));
+        Self {
+            predicted: v3(),
+            solution: v3(),
+            residual: v3(),
+            preconditioned: v3(),
+            direction: v3(),
+            product: v3(),
+            block: core::array::from_fn(|_| zeros(capacity)),
+            partial_dots: zeros(capacity.div_ceil(DOT_RANGE)),
+        }
+    }
+
+    /// The arrays as views over the first `n` particles.
+    pub fn views(&mut self, n: usize) -> ImplicitViews<'_, R> {
+        ImplicitViews {
+            predicted: vec3_view_mut(&mut self.predicted, n),
+            solution: vec3_view_mut(&mut self.solution, n),
+            residual: vec3_view_mut(&mut self.residual, n),
+            preconditioned: vec3_view_mut(&mut self.preconditioned, n),
+            direction: vec3_view_mut(&mut self.direction, n),
+            product: vec3_view_mut(&mut self.product, n),
+            block: stress_view_mut(&mut self.block, n),
+            partial_dots: view_mut(&mut self.partial_dots, n.div_ceil(DOT_RANGE)),
         }
     }
 }
@@ -65,6 +119,9 @@ pub struct Particles<R> {
     /// This step's shift (m), computed over the step's positions and applied after leap-frog.
     /// Allocated only where the scene shifts particles.
     pub shift: Option<[Vec<R>; 3]>,
+    /// The implicit viscosity solve's arrays, scratch within a step. Allocated only where
+    /// viscosity is solved implicitly.
+    pub implicit: Option<ImplicitArrays<R>>,
     /// Targets of the reorder, swapped with the field they receive.
     pub(crate) scratch_f64: Vec<f64>,
     pub(crate) scratch_real: Vec<R>,
@@ -93,6 +150,7 @@ impl<R: Real> Particles<R> {
                 .then(|| core::array::from_fn(|_| core::array::from_fn(|_| zeros(capacity)))),
             density_rate: fields.density_rate.then(|| zeros(capacity)),
             shift: fields.shift.then(|| core::array::from_fn(|_| zeros(capacity))),
+            implicit: fields.implicit.then(|| ImplicitArrays::with_capacity(capacity)),
             scratch_f64: zeros(capacity),
             scratch_real: zeros(capacity),
             scratch_u32: zeros(capacity),
@@ -140,6 +198,7 @@ impl<R: Real> Particles<R> {
             velocity_gradient: self.velocity_gradient.is_some(),
             density_rate: self.density_rate.is_some(),
             shift: self.shift.is_some(),
+            implicit: self.implicit.is_some(),
         }
     }
 
@@ -164,8 +223,9 @@ impl<R: Real> Particles<R> {
         let gradient = if fields.velocity_gradient { 9 * r } else { 0 };
         let density_rate = if fields.density_rate { r } else { 0 };
         let shift = if fields.shift { 3 * r } else { 0 };
+        let implicit = if fields.implicit { ImplicitArrays::<R>::BYTES_PER_PARTICLE } else { 0 };
         let scratch = 8 + r + 4;
-        position + velocities_and_acceleration + 4 + r + stress + viscosity + gradient + density_rate + shift + scratch
+        position + velocities_and_acceleration + 4 + r + stress + viscosity + gradient + density_rate + shift + implicit + scratch
     }
 
     pub fn position_view(&self) -> Vec3View<'_, f64> {

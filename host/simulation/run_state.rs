@@ -2,9 +2,9 @@
 //! variant, the clock and time step, the inlets, the particle counts and the guard.
 
 use super::{Diagnostics, Instability};
-use crate::scene::{DensityKernelKind, ViscousVelocity};
+use crate::scene::{DensityKernelKind, ImplicitViscosity, NoConvergence, ViscousVelocity};
 use crate::simulation::inlet::Inlet;
-use crate::simulation::model::Model;
+use crate::simulation::model::{Model, SolveReport};
 use crate::simulation::particles::Particles;
 use crate::simulation::time_step::{Limit, TimeStepper};
 use coil_kernels::fluid::Fluid;
@@ -48,6 +48,32 @@ pub struct RunState<R: Real, M: Model<R>> {
     /// Particle shifting's constants, where the scene shifts particles (the particles then
     /// hold a shift).
     pub shifting: Option<Shifting<R>>,
+    /// The implicit viscosity solve's settings, where viscosity is solved implicitly.
+    pub implicit: Option<ImplicitViscosity>,
+    /// The implicit solves of this run so far.
+    pub solves: SolveStatistics,
+}
+
+/// Conjugate-gradient iterations of a run's implicit viscosity solves.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SolveStatistics {
+    pub steps: u64,
+    pub iterations: u64,
+    pub largest_iterations: u32,
+    /// Steps whose solve stopped above its tolerance.
+    pub unconverged: u64,
+    pub last: Option<SolveReport>,
+}
+
+impl SolveStatistics {
+    /// Mean iterations per step.
+    pub fn mean_iterations(&self) -> f64 {
+        if self.steps == 0 {
+            0.0
+        } else {
+            self.iterations as f64 / self.steps as f64
+        }
+    }
 }
 
 impl<R: Real, M: Model<R>> RunState<R, M> {
@@ -166,6 +192,28 @@ impl<R: Real, M: Model<R>> RunState<R, M> {
         self.count_removed(self.fluid_count - fluid_now);
     }
 
+    /// Counts a step's implicit solve; a solve that missed its tolerance stops the run unless
+    /// the scene asks to go on.
+    pub(crate) fn record_solve(&mut self, report: SolveReport) -> Result<(), Instability> {
+        let stats = &mut self.solves;
+        stats.steps += 1;
+        stats.iterations += u64::from(report.iterations);
+        stats.largest_iterations = stats.largest_iterations.max(report.iterations);
+        stats.last = Some(report);
+        if report.converged {
+            return Ok(());
+        }
+        stats.unconverged += 1;
+        match self.implicit {
+            Some(settings) if settings.on_no_convergence == NoConvergence::Stop => {
+                let mut diagnosis = self.instability(0, None);
+                diagnosis.unconverged_solve = Some((report, settings));
+                Err(diagnosis)
+            }
+            _ => Ok(()),
+        }
+    }
+
     /// The guard: the latest diagnostics must show no runaway particle.
     pub(crate) fn check(&self) -> Result<(), Instability> {
         if self.diagnostics.bad_particles == 0 {
@@ -187,6 +235,7 @@ impl<R: Real, M: Model<R>> RunState<R, M> {
             stability_bound_s: self.stepper.bound.dt().0,
             viscous_velocity: self.viscous_velocity,
             non_finite,
+            unconverged_solve: None,
         }
     }
 }

@@ -31,6 +31,12 @@ use crate::topology::{Open, Periodic};
 use crate::velocity_gradient::{KernelSum, OwnDensity};
 use crate::view::{View, ViewMut};
 use crate::viscosity::hourglass_ganzenmuller2015::{velocity_gradient_pass, HourglassControlledStress, VelocityGradientArgs};
+use crate::viscosity::implicit_weiler2018::{
+    cg_direction_pass, cg_start_pass, cg_step_pass, dot_pass, implicit_stress_pass, lagged_viscosity_pass, predictor_pass,
+    system_block_pass, system_product_pass, viscous_acceleration_pass, CgDirectionArgs, CgStartArgs, CgStepArgs, DotArgs,
+    ImplicitStressArgs, LaggedViscosityArgs, PredictorArgs, PressureAndGravity, SystemBlockArgs, SystemProductArgs,
+    ViscousAccelerationArgs,
+};
 use crate::viscosity::laplacian_morris1997::MorrisViscosity;
 use crate::viscosity::laplacian_morris1997::{shear_viscosity_pass, ShearViscosityArgs};
 use crate::viscosity::laplacian_muller2003::VelocityLaplacian;
@@ -357,6 +363,72 @@ per_index_kernel!(nozzle_shift_f32, NozzleShiftArgs<'static, f32>, nozzle_shift_
 per_index_kernel!(nozzle_shift_f64, NozzleShiftArgs<'static, f64>, nozzle_shift_pass::<f64>);
 per_index_kernel!(density_integration_f32, DensityIntegrationArgs<'static, f32>, density_integration_pass::<f32>);
 per_index_kernel!(density_integration_f64, DensityIntegrationArgs<'static, f64>, density_integration_pass::<f64>);
+per_neighborhood_kernels!(
+    acceleration_pressure_f32,
+    acceleration_pressure_periodic_f32,
+    AccelerationArgs<f32, PressureAndGravity>,
+    acceleration_pass<f32, PressureAndGravity>
+);
+per_neighborhood_kernels!(
+    acceleration_pressure_f64,
+    acceleration_pressure_periodic_f64,
+    AccelerationArgs<f64, PressureAndGravity>,
+    acceleration_pass<f64, PressureAndGravity>
+);
+per_index_kernel!(predictor_f32, PredictorArgs<'static, f32>, predictor_pass::<f32>);
+per_index_kernel!(predictor_f64, PredictorArgs<'static, f64>, predictor_pass::<f64>);
+per_neighborhood_kernels!(
+    lagged_viscosity_newtonian_f32,
+    lagged_viscosity_newtonian_periodic_f32,
+    LaggedViscosityArgs<f32, Newtonian<f32>>,
+    lagged_viscosity_pass<f32, Newtonian<f32>>
+);
+per_neighborhood_kernels!(
+    lagged_viscosity_newtonian_f64,
+    lagged_viscosity_newtonian_periodic_f64,
+    LaggedViscosityArgs<f64, Newtonian<f64>>,
+    lagged_viscosity_pass<f64, Newtonian<f64>>
+);
+per_neighborhood_kernels!(
+    lagged_viscosity_cross_f32,
+    lagged_viscosity_cross_periodic_f32,
+    LaggedViscosityArgs<f32, Cross<f32>>,
+    lagged_viscosity_pass<f32, Cross<f32>>
+);
+per_neighborhood_kernels!(
+    lagged_viscosity_cross_f64,
+    lagged_viscosity_cross_periodic_f64,
+    LaggedViscosityArgs<f64, Cross<f64>>,
+    lagged_viscosity_pass<f64, Cross<f64>>
+);
+per_neighborhood_kernels!(implicit_stress_f32, implicit_stress_periodic_f32, ImplicitStressArgs<f32>, implicit_stress_pass<f32>);
+per_neighborhood_kernels!(implicit_stress_f64, implicit_stress_periodic_f64, ImplicitStressArgs<f64>, implicit_stress_pass<f64>);
+per_neighborhood_kernels!(system_block_f32, system_block_periodic_f32, SystemBlockArgs<f32>, system_block_pass<f32>);
+per_neighborhood_kernels!(system_block_f64, system_block_periodic_f64, SystemBlockArgs<f64>, system_block_pass<f64>);
+per_neighborhood_kernels!(system_product_f32, system_product_periodic_f32, SystemProductArgs<f32>, system_product_pass<f32>);
+per_neighborhood_kernels!(system_product_f64, system_product_periodic_f64, SystemProductArgs<f64>, system_product_pass<f64>);
+per_index_kernel!(cg_start_f32, CgStartArgs<'static, f32>, cg_start_pass::<f32>);
+per_index_kernel!(cg_start_f64, CgStartArgs<'static, f64>, cg_start_pass::<f64>);
+per_index_kernel!(cg_step_f32, CgStepArgs<'static, f32>, cg_step_pass::<f32>);
+per_index_kernel!(cg_step_f64, CgStepArgs<'static, f64>, cg_step_pass::<f64>);
+per_index_kernel!(cg_direction_f32, CgDirectionArgs<'static, f32>, cg_direction_pass::<f32>);
+per_index_kernel!(cg_direction_f64, CgDirectionArgs<'static, f64>, cg_direction_pass::<f64>);
+per_index_kernel!(viscous_acceleration_f32, ViscousAccelerationArgs<'static, f32>, viscous_acceleration_pass::<f32>);
+per_index_kernel!(viscous_acceleration_f64, ViscousAccelerationArgs<'static, f64>, viscous_acceleration_pass::<f64>);
+
+/// One thread per range of `DOT_RANGE` particles; ranges past the live count write zeros.
+macro_rules! dots_kernel {
+    ($name:ident, $t:ty) => {
+        entry!($name(r; count: View<'static, u32>, args: DotArgs<'static, $t>, out: ViewMut<'static, [f64; 2]>) {
+            if r < out.len() {
+                dot_pass(r, count.at(0) as usize, &args, out);
+            }
+        });
+    };
+}
+
+dots_kernel!(dots_f32, f32);
+dots_kernel!(dots_f64, f64);
 per_topology_kernels!(leapfrog_f32, leapfrog_periodic_f32, LeapfrogArgs<f32>, leapfrog_pass<f32>);
 per_topology_kernels!(leapfrog_f64, leapfrog_periodic_f64, LeapfrogArgs<f64>, leapfrog_pass<f64>);
 per_neighborhood_kernels!(shifting_f32, shifting_periodic_f32, ShiftingArgs<f32>, shifting_pass<f32>);
@@ -507,6 +579,42 @@ pub const ENTRIES: &[(&str, Emulated)] = {
         };
     }
     by_name![
+        acceleration_pressure_f32,
+        acceleration_pressure_periodic_f32,
+        acceleration_pressure_f64,
+        acceleration_pressure_periodic_f64,
+        predictor_f32,
+        predictor_f64,
+        lagged_viscosity_newtonian_f32,
+        lagged_viscosity_newtonian_periodic_f32,
+        lagged_viscosity_newtonian_f64,
+        lagged_viscosity_newtonian_periodic_f64,
+        lagged_viscosity_cross_f32,
+        lagged_viscosity_cross_periodic_f32,
+        lagged_viscosity_cross_f64,
+        lagged_viscosity_cross_periodic_f64,
+        implicit_stress_f32,
+        implicit_stress_periodic_f32,
+        implicit_stress_f64,
+        implicit_stress_periodic_f64,
+        system_block_f32,
+        system_block_periodic_f32,
+        system_block_f64,
+        system_block_periodic_f64,
+        system_product_f32,
+        system_product_periodic_f32,
+        system_product_f64,
+        system_product_periodic_f64,
+        cg_start_f32,
+        cg_start_f64,
+        cg_step_f32,
+        cg_step_f64,
+        cg_direction_f32,
+        cg_direction_f64,
+        viscous_acceleration_f32,
+        viscous_acceleration_f64,
+        dots_f32,
+        dots_f64,
         hash,
         density_f32,
         density_periodic_f32,

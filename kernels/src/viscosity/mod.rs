@@ -8,12 +8,15 @@
 //! - [`laplacian_morris1997`]: Morris, Fox & Zhu 1997's Laplacian, Newtonian or with a
 //!   per-particle Cross viscosity.
 //! - [`hourglass_ganzenmuller2015`]: the paper's operator with hourglass control.
+//! - [`implicit_weiler2018`]: the paper's operator solved implicitly (backward Euler, conjugate
+//!   gradients), so that viscosity does not bound the time step.
 
 use crate::real::Real;
 use crate::smoothing::SmoothingKernels;
 use crate::vec3::Vec3;
 
 pub mod hourglass_ganzenmuller2015;
+pub mod implicit_weiler2018;
 pub mod laplacian_morris1997;
 pub mod laplacian_muller2003;
 pub mod stress_andrade2014;
