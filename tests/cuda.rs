@@ -426,6 +426,30 @@ fn a_jet_on_the_gpu_agrees_with_the_cpu() {
     }
 }
 
+/// The jet with implicit viscosity: the solve's passes, its fixed-order dot products read back
+/// every iteration, and its arrays on the device move the particles as on the CPU.
+#[test]
+fn implicit_viscosity_on_the_gpu_agrees_with_the_cpu() {
+    use coil::simulation::implicit_viscosity::ImplicitStressModel;
+    let mut scene = small_jet();
+    scene.material.viscosity.solver = coil::scene::ViscositySolver::Implicit;
+    scene.material.viscosity.velocity_gradient = coil::scene::VelocityGradient::OwnDensity;
+    let model = ImplicitStressModel { rheology: Newtonian { nu0: 0.001 }, tolerance: 1e-3, max_iterations: 100 };
+    for engine in engines() {
+        let (cpu, on_gpu) = both_with::<f64, _>(engine.open(), &scene, model, 300, 2e-4);
+        assert!(cpu.run.solves.iterations > 0, "the solve never iterated: the test would not see it");
+        if matches!(engine, Engine::Emulated) {
+            assert_eq!(on_gpu.run.solves, cpu.run.solves, "{engine:?}: the solves' iterations and residuals");
+        }
+        let worst = largest_position_difference(&state_by_id(cpu.particles()), &state_by_id(on_gpu.particles()));
+        println!(
+            "{engine:?}, implicit jet: {:.1} iterations a step, largest position difference after 300 steps {worst:.3e} m",
+            cpu.run.solves.mean_iterations()
+        );
+        assert!(worst <= engine.f64_tolerance_m(), "{engine:?}, implicit jet: positions differ by {worst:.3e} m");
+    }
+}
+
 /// The jet with density from the continuity equation: its density is state that the sort
 /// gathers, the inlet appends at rho0 and two more passes integrate, so positions and densities
 /// agree as in the jet above.

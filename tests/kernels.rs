@@ -3,6 +3,7 @@
 mod common;
 
 use coil::scene::DensityKernelKind;
+use coil::simulation::model::SolveReport;
 use coil_kernels::cell_grid::Neighbors;
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
@@ -794,7 +795,7 @@ impl Ball {
             velocity_gradient: true,
             density_rate: false,
             shift: false,
-            implicit: false,
+            implicit: true,
         };
         let in_ball = |x: [f64; 3]| x.map(|c| c - BALL_CENTRE).iter().map(|c| c * c).sum::<f64>().sqrt() <= 3.5 * LATTICE_SPACING;
         let (mut particles, grid, fluid) = sorted_lattice(20, fields, in_ball, |_| [0.0; 3]);
@@ -1073,6 +1074,180 @@ fn the_own_density_gradient_makes_the_papers_operator_symmetric() {
     let mut decay: Vec<f64> = own.iter().map(|a| -a).collect();
     (0..dof).for_each(|k| decay[k * dof + k] += 1e-9 * scale);
     assert!(is_positive_definite(decay, dof), "own density: the operator creates kinetic energy");
+}
+
+impl Ball {
+    /// Eq. (10)'s viscous bound for the ball's nu = 0.1 m^2/s (s).
+    fn viscous_bound(&self) -> f64 {
+        0.1 * self.fluid.kernels.h2 / (8.0 * 0.1)
+    }
+
+    /// One implicit viscous step of kick `kick_dt` (s) from `velocity` (m/s, by axis), nu = 0.1
+    /// m^2/s, no pressure and no gravity: the new velocities and how the solve went.
+    fn implicit_step(&mut self, velocity: &[Vec<f64>; 3], kick_dt: f64, tolerance: f64) -> (Vec<Vec3<f64>>, SolveReport) {
+        use coil::cpu::CpuPasses;
+        use coil::simulation::implicit_viscosity::ImplicitStressModel;
+        use coil::simulation::model::{ImplicitStep, Model, ParticleState};
+        use coil::simulation::particles::{stress_view_mut, vec3_view, vec3_view_mut, view_mut};
+        let (fluid, p) = (self.fluid, &mut self.particles);
+        let n = p.len();
+        let model = ImplicitStressModel { rheology: Newtonian { nu0: 0.1 }, tolerance, max_iterations: 10_000 };
+        let velocity_view = vec3_view(velocity, n);
+        let state = ParticleState {
+            neighborhood: self.grid.neighborhood(vec3_view(&p.position, n), Open),
+            fluid,
+            id: View::new(&p.id[..n]),
+            velocity: velocity_view,
+            density: View::new(&p.density[..n]),
+            stress: Some(stress_view_mut(p.stress.as_mut().expect("allocated"), n)),
+            viscosity: Some(view_mut(p.viscosity.as_mut().expect("allocated"), n)),
+            velocity_gradient: None,
+            acceleration: vec3_view_mut(&mut p.acceleration, n),
+            implicit: Some(ImplicitStep {
+                kick_dt,
+                velocity_half: velocity_view,
+                velocity: velocity_view,
+                arrays: p.implicit.as_mut().expect("allocated").views(n),
+            }),
+        };
+        let report = Model::<f64>::accelerations::<Open, _, _>(&model, &mut CpuPasses { n }, state).expect("the implicit model reports its solve");
+        let v = (0..n)
+            .map(|i| {
+                let a = |k: usize| velocity[k][i] + kick_dt * p.acceleration[k][i];
+                Vec3::new(a(0), a(1), a(2))
+            })
+            .collect();
+        (v, report)
+    }
+}
+
+/// A velocity field with no pattern the operator could miss: each component of each particle
+/// from a fixed pseudo-random sequence, up to 1 m/s.
+fn scrambled_velocity(n: usize) -> [Vec<f64>; 3] {
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    std::array::from_fn(|_| (0..n).map(|_| 2.0 * next()).collect())
+}
+
+/// The implicit solve's system, I - dt A, is the paper's operator with the own-density gradient:
+/// its product agrees with the whole matrix of that operator, and the preconditioner's 3x3
+/// blocks are that matrix's diagonal blocks.
+#[test]
+fn the_implicit_system_is_the_papers_operator_and_its_preconditioner_its_diagonal_blocks() {
+    use coil::simulation::particles::{stress_view_mut, vec3_view};
+    use coil_kernels::viscosity::implicit_weiler2018::{
+        implicit_stress_pass, system_block_pass, system_product_pass, ImplicitStressArgs, SystemBlockArgs, SystemProductArgs,
+    };
+    let (dof, [a]) = free_surface_matrices(|ball, v| [ball.paper_accelerations(v, OwnDensity)]);
+    let mut ball = Ball::new();
+    let dt = 10.0 * ball.viscous_bound();
+    let (fluid, p) = (ball.fluid, &mut ball.particles);
+    let n = p.len();
+    let nb = ball.grid.neighborhood(vec3_view(&p.position, n), Open);
+    let density = View::new(&p.density[..n]);
+    let id = View::new(&p.id[..n]);
+    p.viscosity.as_mut().expect("allocated")[..n].fill(0.1);
+    let viscosity = View::new(&p.viscosity.as_ref().expect("allocated")[..n]);
+    let mut arrays = p.implicit.take().expect("allocated");
+    let x = arrays.views(n);
+    let block = SystemBlockArgs { neighborhood: nb, fluid, kick_dt: dt, id, density, viscosity, block: x.block };
+    (0..n).for_each(|i| system_block_pass(i, &block));
+    let b = x.block.read();
+    let scale = (0..dof).map(|r| (0..dof).map(|c| a[r * dof + c].abs()).sum::<f64>()).fold(0.0, f64::max) * dt;
+    let mut block_error = 0.0f64;
+    for i in 0..n {
+        let got =
+            [[b.xx.at(i), b.xy.at(i), b.xz.at(i)], [b.xy.at(i), b.yy.at(i), b.yz.at(i)], [b.xz.at(i), b.yz.at(i), b.zz.at(i)]];
+        for r in 0..3 {
+            for c in 0..3 {
+                let want = if r == c { 1.0 } else { 0.0 } - dt * a[(3 * i + r) * dof + 3 * i + c];
+                block_error = block_error.max((got[r][c] - want).abs());
+            }
+        }
+    }
+    let v = scrambled_velocity(n);
+    let stress = stress_view_mut(p.stress.as_mut().expect("allocated"), n);
+    let velocity = vec3_view(&v, n);
+    let args = ImplicitStressArgs { neighborhood: nb, fluid, velocity, density, viscosity, stress };
+    (0..n).for_each(|i| implicit_stress_pass(i, &args));
+    let product = SystemProductArgs {
+        neighborhood: nb,
+        fluid,
+        kick_dt: dt,
+        id,
+        density,
+        stress: stress.read(),
+        velocity,
+        product: x.product,
+    };
+    (0..n).for_each(|i| system_product_pass(i, &product));
+    let mut product_error = 0.0f64;
+    for row in 0..dof {
+        let av: f64 = (0..dof).map(|c| a[row * dof + c] * v[c % 3][c / 3]).sum();
+        let want = v[row % 3][row / 3] - dt * av;
+        product_error = product_error.max((x.product.at(row / 3)[row % 3] - want).abs());
+    }
+    eprintln!("dt {dt:.2e} s, dt times the largest row sum {scale:.2e}: block error {block_error:.2e}, product error {product_error:.2e} m/s");
+    assert!(block_error < 1e-12 * scale, "the preconditioner's blocks differ from the operator's by {block_error}");
+    assert!(product_error < 1e-12 * scale, "(I - dt A) v differs from the operator's matrix by {product_error} m/s");
+}
+
+/// Backward Euler on a symmetric negative semidefinite operator: from 1 to 1000 times Eq. (10)'s
+/// viscous bound a step never adds kinetic energy, and it keeps momentum to the solve's
+/// tolerance, since A's columns sum to zero.
+#[test]
+fn an_implicit_viscous_step_never_gains_energy_and_keeps_momentum_far_above_the_explicit_bound() {
+    let mut ball = Ball::new();
+    let n = ball.particles.len();
+    let v = scrambled_velocity(n);
+    let energy = |v: &[Vec3<f64>]| v.iter().map(|v| v.norm2()).sum::<f64>();
+    let before: Vec<Vec3<f64>> = (0..n).map(|i| Vec3::new(v[0][i], v[1][i], v[2][i])).collect();
+    let momentum = |v: &[Vec3<f64>]| v.iter().fold(Vec3::zero(), |s, &v| s + v);
+    let speed_sum: f64 = before.iter().map(|v| v.norm()).sum();
+    for multiple in [1.0, 10.0, 100.0, 1000.0] {
+        let dt = multiple * ball.viscous_bound();
+        let (after, report) = ball.implicit_step(&v, dt, 1e-10);
+        let ratio = energy(&after) / energy(&before);
+        let drift = (momentum(&after) - momentum(&before)).norm() / speed_sum;
+        eprintln!(
+            "{multiple} x the bound: {} iterations, kinetic energy x {ratio:.4}, momentum drift {drift:.1e} of the summed speeds",
+            report.iterations
+        );
+        assert!(report.converged, "{multiple} x: the solve did not converge ({report:?})");
+        assert!(ratio < 1.0, "{multiple} x: the step gained kinetic energy (x {ratio})");
+        assert!(drift < 1e-8, "{multiple} x: momentum drifted by {drift} of the summed speeds");
+    }
+}
+
+/// As dt shrinks the implicit viscous acceleration approaches the explicit operator's, to first
+/// order in dt (backward Euler).
+#[test]
+fn as_dt_shrinks_the_implicit_step_approaches_the_explicit_one() {
+    let mut ball = Ball::new();
+    let n = ball.particles.len();
+    let v = scrambled_velocity(n);
+    let explicit = ball.paper_accelerations(&v, OwnDensity);
+    let scale = explicit.iter().map(|a| a.norm()).fold(0.0, f64::max);
+    let mut errors = vec![];
+    for fraction in [1e-1, 1e-2] {
+        let dt = fraction * ball.viscous_bound();
+        let (after, _) = ball.implicit_step(&v, dt, 1e-12);
+        let error = (0..n)
+            .map(|i| ((after[i] - Vec3::new(v[0][i], v[1][i], v[2][i])) * (1.0 / dt) - explicit[i]).norm())
+            .fold(0.0, f64::max)
+            / scale;
+        eprintln!("dt = {fraction} x the bound: implicit against explicit acceleration {error:.2e} of the largest");
+        errors.push(error);
+    }
+    let order = (errors[0] / errors[1]).log10();
+    eprintln!("observed order {order:.2}");
+    assert!(errors[1] < 1e-2, "the implicit step does not approach the explicit one: {errors:?}");
+    assert!((0.8..1.2).contains(&order), "the error is not first order in dt: {errors:?}");
 }
 
 /// d rho / dt of the particle nearest the centre of a 12^3 [`sorted_lattice`] at rest density

@@ -184,9 +184,10 @@ impl<R: Real> Backend<R> for CpuBackend<R> {
     }
 }
 
-/// The CPU's passes: each kernel function over `n` particles with rayon.
-struct CpuPasses {
-    n: usize,
+/// The CPU's passes: each kernel function over `n` particles with rayon; a model's schedule
+/// can run on arrays a test or check built by hand.
+pub struct CpuPasses {
+    pub n: usize,
 }
 
 impl<R: Real, T: Topology, N: Neighbors + Sync> Passes<R, T, N> for CpuPasses {

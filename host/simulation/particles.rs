@@ -58,7 +58,7 @@ impl<R: Real> ImplicitArrays<R> {
     /// Six vectors and a symmetric block per particle, and a share of the partial dots.
     pub const BYTES_PER_PARTICLE: usize = (6 * 3 + 6) * std::mem::size_of::<R>();
 
-    fn with_capacity(capacity: usize) -> Self {
+    pub fn with_capacity(capacity: usize) -> Self {
         let v3 = || core::array::from_fn(|_| zeros(capacity));
         Self {
             predicted: v3(),
