@@ -72,6 +72,17 @@ fn bad_scenes_exit_2_naming_file_and_field() {
             "material.viscosity.velocity_gradient",
         ),
         ("operator = \"stress\"", "operator = \"stress\"\nvelocity_gradient = \"bonet\"", "velocity_gradient"),
+        ("operator = \"stress\"", "operator = \"stress\"\nsolver = \"implicit\"", "material.viscosity.solver"),
+        (
+            "operator = \"stress\"",
+            "operator = \"stress\"\nvelocity_gradient = \"own_density\"\nsolver = \"implicit\"\nimplicit = { tolerance = 2.0 }",
+            "material.viscosity.implicit.tolerance",
+        ),
+        (
+            "operator = \"stress\"",
+            "operator = \"stress\"\nvelocity_gradient = \"own_density\"\nsolver = \"implicit\"\nimplicit = { max_iterations = 0 }",
+            "material.viscosity.implicit.max_iterations",
+        ),
     ];
     for (k, (from, to, field)) in cases.iter().enumerate() {
         assert!(good.contains(from), "{from}");
