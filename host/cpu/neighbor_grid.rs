@@ -252,5 +252,10 @@ fn reorder<R: Real>(p: &mut Particles<R>, order: View<u32>, live: usize) {
     if p.density_is_state() {
         permute(&mut p.density, &mut p.scratch_real, order, live);
     }
+    if let Some(implicit) = &mut p.implicit {
+        for a in 0..3 {
+            permute(&mut implicit.viscous_change[a], &mut p.scratch_real, order, live);
+        }
+    }
     p.set_len(live);
 }

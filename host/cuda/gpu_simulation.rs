@@ -91,6 +91,8 @@ struct DeviceState<R> {
     staged_id: DeviceArray<u32>,
     /// The layers' density, where density comes from the continuity equation.
     staged_density: Option<DeviceArray<R>>,
+    /// Zeros for the layers' viscous change, where viscosity is solved implicitly.
+    staged_zeros: Option<DeviceArray<R>>,
     /// One `StateFigures` per diagnostics range.
     figures: DeviceArray<StateFigures>,
     /// Wall particles' mirror images by id, under mirrored walls.
@@ -101,6 +103,8 @@ struct DeviceState<R> {
 
 /// The implicit viscosity solve's arrays on the device (`particles::ImplicitArrays`).
 struct DeviceImplicit<R> {
+    /// The last step's viscous change of velocity: state, which the sort gathers.
+    viscous_change: DeviceVec3<R>,
     /// predicted, solution, residual, preconditioned, direction, product.
     vectors: [DeviceVec3<R>; 6],
     block: [DeviceArray<R>; 6],
@@ -112,6 +116,7 @@ impl<R: Real> DeviceImplicit<R> {
         let v = || vec3_zeros(gpu, capacity, "implicit viscosity vectors");
         let b = || DeviceArray::zeros(gpu, capacity, "implicit viscosity blocks");
         Ok(Self {
+            viscous_change: v()?,
             vectors: [v()?, v()?, v()?, v()?, v()?, v()?],
             block: [b()?, b()?, b()?, b()?, b()?, b()?],
             partial_dots: DeviceArray::zeros(gpu, capacity.div_ceil(DOT_RANGE), "partial dot products")?,
@@ -119,7 +124,7 @@ impl<R: Real> DeviceImplicit<R> {
     }
 
     fn bytes(&self) -> usize {
-        self.vectors.iter().flatten().map(DeviceArray::bytes).sum::<usize>()
+        self.viscous_change.iter().chain(self.vectors.iter().flatten()).map(DeviceArray::bytes).sum::<usize>()
             + self.block.iter().map(DeviceArray::bytes).sum::<usize>()
             + self.partial_dots.bytes()
     }
@@ -128,6 +133,7 @@ impl<R: Real> DeviceImplicit<R> {
         let [xx, yy, zz, xy, xz, yz] = &self.block;
         let v = |k: usize| vec3_view_mut(&self.vectors[k], n);
         ImplicitViews {
+            viscous_change: vec3_view_mut(&self.viscous_change, n),
             predicted: v(0),
             solution: v(1),
             residual: v(2),
@@ -203,6 +209,7 @@ impl<R: Real> DeviceState<R> {
             staged_velocity: vec3_zeros(gpu, staged, "inlet layers")?,
             staged_id: DeviceArray::zeros(gpu, staged, "inlet layers")?,
             staged_density: if fields.density_rate { Some(DeviceArray::zeros(gpu, staged, "inlet layers")?) } else { None },
+            staged_zeros: if fields.implicit { Some(DeviceArray::zeros(gpu, staged, "inlet layers")?) } else { None },
             figures: DeviceArray::zeros(gpu, capacity.div_ceil(DIAGNOSTICS_RANGE), "diagnostics")?,
             wall_mirror: None,
             implicit: if fields.implicit { Some(DeviceImplicit::new(gpu, capacity)?) } else { None },
@@ -238,6 +245,7 @@ impl<R: Real> DeviceState<R> {
             + r3(&self.staged_velocity)
             + self.staged_id.bytes()
             + self.staged_density.as_ref().map_or(0, DeviceArray::bytes)
+            + self.staged_zeros.as_ref().map_or(0, DeviceArray::bytes)
             + self.figures.bytes()
             + self.wall_mirror.as_ref().map_or(0, v3)
             + self.implicit.as_ref().map_or(0, DeviceImplicit::bytes)
@@ -487,6 +495,11 @@ impl<R: Real> CudaBackend<R> {
         }
         d.id.upload(gpu, &p.id[..n])?;
         d.density.upload(gpu, &p.density[..n])?;
+        if let (Some(device), Some(host)) = (&mut d.implicit, &p.implicit) {
+            for a in 0..3 {
+                device.viscous_change[a].upload(gpu, &host.viscous_change[a][..n])?;
+            }
+        }
         d.cell_start.upload(gpu, self.mirror.grid.cell_start_mut())?;
         d.near_fluid.upload(gpu, self.mirror.grid.near_fluid_mut())?;
         d.count.upload(gpu, &[n as u32])?;
@@ -576,6 +589,17 @@ impl<R: Real> CudaBackend<R> {
                 )?;
                 std::mem::swap(&mut d.density, &mut d.scratch_real);
             }
+            if let Some(implicit) = &mut d.implicit {
+                for field in &mut implicit.viscous_change {
+                    let sorted = ByValue(d.scratch_real.view_mut(n));
+                    gpu.launch(
+                        kernel::<R>("gather", "", ""),
+                        threads,
+                        &[&count, &order, &ByValue(field.view(capacity)), &sorted],
+                    )?;
+                    std::mem::swap(field, &mut d.scratch_real);
+                }
+            }
         }
         Ok(())
     }
@@ -662,6 +686,16 @@ impl<R: Real> Backend<R> for CudaBackend<R> {
             if let Some(staged) = &d.staged_density {
                 let target = ByValue(d.density.view_mut(capacity));
                 gpu.launch(kernel::<R>("append", "", ""), added as u32, &[&count, &k, &ByValue(staged.view(added)), &target])?;
+            }
+            // New particles start the implicit solve from v* alone.
+            if let (Some(implicit), Some(zeros)) = (&d.implicit, &d.staged_zeros) {
+                for target in &implicit.viscous_change {
+                    gpu.launch(
+                        kernel::<R>("append", "", ""),
+                        added as u32,
+                        &[&count, &k, &ByValue(zeros.view(added)), &ByValue(target.view_mut(capacity))],
+                    )?;
+                }
             }
             gpu.launch("grow_count", 1, &[&ByValue(d.count.view_mut(1)), &k])?;
         }
@@ -759,6 +793,11 @@ impl<R: Real> Backend<R> for CudaBackend<R> {
         }
         d.id.download(gpu, &mut p.id[..n])?;
         d.density.download(gpu, &mut p.density[..n])?;
+        if let (Some(device), Some(host)) = (&d.implicit, &mut p.implicit) {
+            for a in 0..3 {
+                device.viscous_change[a].download(gpu, &mut host.viscous_change[a][..n])?;
+            }
+        }
         d.cell_start.download(gpu, self.mirror.grid.cell_start_mut())?;
         d.near_fluid.download(gpu, self.mirror.grid.near_fluid_mut())?;
         Ok(())

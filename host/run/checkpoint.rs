@@ -4,7 +4,8 @@
 //!
 //! Only what a step reads from the step before is kept: positions, velocities at the full and
 //! the half step, ids and densities of the live particles in their current order (the next
-//! sort is stable in that order), the clock and dt of the last step, the diagnostics the next
+//! sort is stable in that order), where viscosity is solved implicitly the last step's viscous
+//! change of velocity (the next solve's first guess), the clock and dt of the last step, the diagnostics the next
 //! dt reads, each inlet's progress, and the frame schedule and running figures of the summary.
 //! Everything else (walls' mirror images, the grid, stresses, accelerations) is rebuilt from
 //! the scene or recomputed by the next step.
@@ -24,8 +25,9 @@ use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"COILCKPT";
 /// 2: the fingerprint hashes the [`PHYSICS`] fields only. 3: the frame files' sizes and
-/// digests.
-const FORMAT_VERSION: u32 = 3;
+/// digests. 4: a flag after the densities, then the implicit solve's viscous change where it
+/// is set (a version 3 checkpoint, which has neither, is read as unset).
+const FORMAT_VERSION: u32 = 4;
 
 /// FNV-1a, 64 bits: the same value on every machine and Rust version, unlike std's hasher.
 pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
@@ -33,15 +35,15 @@ pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
 }
 
 /// Fields of a scene that a resumed run may change ([`RESUMABLE`] as `--set` spells them): how
-/// far it runs, how it picks dt (to get past an instability from the last good frame), and
-/// what it writes.
-pub const RESUMABLE: [&str; 3] = ["simulation.end_time_s", "simulation.time_step", "output"];
+/// far it runs, how it picks dt and how far it solves implicit viscosity (to get past an
+/// instability or an unconverged solve from the last good frame), and what it writes.
+pub const RESUMABLE: [&str; 4] = ["simulation.end_time_s", "simulation.time_step", "material.viscosity.implicit", "output"];
 
 /// The fields that fix what a step computes, as `--set` spells them: a checkpoint resumes only a
 /// scene that agrees with the one it was taken from on each (array sections as a whole). A field
 /// added to the scene joins this list only if it changes the physics, and must then be left out
 /// of the serialized scene at its default, so that checkpoints taken before it existed resume.
-pub const PHYSICS: [&str; 29] = [
+pub const PHYSICS: [&str; 30] = [
     "material.rest_density_kg_m3",
     "material.sound_speed_m_s",
     "material.clamp_negative_pressure",
@@ -59,6 +61,7 @@ pub const PHYSICS: [&str; 29] = [
     "material.viscosity.cross_n",
     "material.viscosity.hourglass_control",
     "material.viscosity.velocity_gradient",
+    "material.viscosity.solver",
     "domain.min_m",
     "domain.max_m",
     "domain.periodic",
@@ -202,6 +205,8 @@ pub struct Checkpoint {
     pub particles: usize,
     /// Where the particle arrays start in `bytes`.
     particle_data: usize,
+    /// Whether the implicit solve's viscous change follows the densities.
+    viscous_change: bool,
     bytes: Vec<u8>,
 }
 
@@ -262,6 +267,12 @@ pub fn encode<R: Real, M: Model<R>>(sim: &RunState<R, M>, p: &Particles<R>, scen
         w.u32(id);
     }
     w.reals(&p.density[..n]);
+    w.u8(u8::from(p.implicit.is_some()));
+    if let Some(implicit) = &p.implicit {
+        for a in 0..3 {
+            w.reals(&implicit.viscous_change[a][..n]);
+        }
+    }
     let sum = fnv1a(&w.0);
     w.u64(sum);
     w.0
@@ -297,7 +308,7 @@ impl Checkpoint {
         }
         let mut r = Reader { bytes: body, at: MAGIC.len() };
         let version = r.u32("the format version")?;
-        if version != FORMAT_VERSION {
+        if version != FORMAT_VERSION && version != 3 {
             return Err(format!("has format version {version}; this coil reads version {FORMAT_VERSION}"));
         }
         let real_bytes = usize::from(r.u8("the precision")?);
@@ -348,6 +359,10 @@ impl Checkpoint {
         let particles = r.count(per_particle, "particles")?;
         let particle_data = r.at;
         r.take(particles * per_particle, "the particles")?;
+        let viscous_change = version >= 4 && r.u8("the implicit solve's flag")? == 1;
+        if viscous_change {
+            r.take(particles * 3 * real_bytes, "the implicit solve's viscous change")?;
+        }
         if r.at != body.len() {
             return Err(format!("has {} bytes past its particles", body.len() - r.at));
         }
@@ -369,6 +384,7 @@ impl Checkpoint {
             tally,
             particles,
             particle_data,
+            viscous_change,
             bytes,
         })
     }
@@ -425,6 +441,19 @@ impl Checkpoint {
         }
         for (d, b) in p.density[..n].iter_mut().zip(next(rb * n).chunks_exact(rb)) {
             *d = real(b);
+        }
+        match (&mut p.implicit, self.viscous_change) {
+            (Some(implicit), true) => {
+                next(1);
+                for a in 0..3 {
+                    for (v, b) in implicit.viscous_change[a][..n].iter_mut().zip(next(rb * n).chunks_exact(rb)) {
+                        *v = real(b);
+                    }
+                }
+            }
+            (None, false) => {}
+            (Some(_), false) => return Err("has no implicit viscosity state, and the scene solves viscosity implicitly".into()),
+            (None, true) => return Err("holds implicit viscosity state, and the scene solves viscosity explicitly".into()),
         }
         if p.id[..n].iter().any(|&id| id >= self.next_id) {
             return Err(format!("holds a particle id at or above its next id {}", self.next_id));

@@ -100,6 +100,8 @@ pub struct ParticleViews<'a, R, T, N> {
 /// The implicit viscosity solve's arrays as views (`coil_kernels::viscosity::implicit_weiler2018`).
 #[derive(Clone, Copy)]
 pub struct ImplicitViews<'a, R> {
+    /// The last step's v - v*, carried from step to step (m/s).
+    pub viscous_change: Vec3ViewMut<'a, R>,
     pub predicted: Vec3ViewMut<'a, R>,
     pub solution: Vec3ViewMut<'a, R>,
     pub residual: Vec3ViewMut<'a, R>,

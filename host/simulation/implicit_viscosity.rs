@@ -73,6 +73,7 @@ impl<Rh> ImplicitStressModel<Rh> {
             velocity_half: step.velocity_half,
             velocity: step.velocity,
             acceleration: s.acceleration.read(),
+            viscous_change: x.viscous_change.read(),
             predicted: x.predicted,
             solution: x.solution,
         });
@@ -114,22 +115,28 @@ impl<Rh> ImplicitStressModel<Rh> {
             });
         };
         let dots = |backend: &mut P, a, b, c, d, partial: ViewMut<'_, [f64; 2]>| backend.dots(DotArgs { a, b, c, d }, partial);
-        // The first guess v*: its residual is the velocity change an explicit step would make.
-        product(backend, x.solution.read(), stress);
-        backend.cg_start(CgStartArgs {
-            fluid,
-            id,
-            predicted: x.predicted.read(),
-            product: x.product.read(),
-            block: x.block.read(),
-            residual: x.residual,
-            preconditioned: x.preconditioned,
-            direction: x.direction,
-        });
+        let start = |backend: &mut P| {
+            backend.cg_start(CgStartArgs {
+                fluid,
+                id,
+                predicted: x.predicted.read(),
+                product: x.product.read(),
+                block: x.block.read(),
+                residual: x.residual,
+                preconditioned: x.preconditioned,
+                direction: x.direction,
+            })
+        };
         let (r, z, p, ap) = (x.residual.read(), x.preconditioned.read(), x.direction.read(), x.product.read());
-        let [mut rz, first] = dots(backend, r, z, r, r, x.partial_dots);
-        let target = self.tolerance * self.tolerance * first;
-        let mut rr = first;
+        // The tolerance is relative to the residual of v* itself, the velocity change an
+        // explicit step would make, not to that of the warm start, which may be far smaller.
+        product(backend, x.predicted.read(), stress);
+        start(backend);
+        let [_, explicit] = dots(backend, r, r, r, r, x.partial_dots);
+        product(backend, x.solution.read(), stress);
+        start(backend);
+        let [mut rz, mut rr] = dots(backend, r, z, r, r, x.partial_dots);
+        let target = self.tolerance * self.tolerance * explicit;
         let mut iterations = 0;
         while rr > target && iterations < self.max_iterations {
             product(backend, p, stress);
@@ -159,10 +166,11 @@ impl<Rh> ImplicitStressModel<Rh> {
             predicted: x.predicted.read(),
             solution: x.solution.read(),
             acceleration: s.acceleration,
+            viscous_change: x.viscous_change,
         });
         SolveReport {
             iterations,
-            relative_residual: if first > 0.0 { (rr / first).sqrt() } else { 0.0 },
+            relative_residual: if explicit > 0.0 { (rr / explicit).sqrt() } else { 0.0 },
             converged: rr <= target,
         }
     }

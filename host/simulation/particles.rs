@@ -39,6 +39,9 @@ impl ModelFields {
 
 /// The implicit viscosity solve's per-particle arrays (`coil_kernels::viscosity::implicit_weiler2018`).
 pub struct ImplicitArrays<R> {
+    /// The last step's viscous change of velocity v - v* (m/s): the next solve's warm start,
+    /// state that the sort reorders and checkpoints keep.
+    pub viscous_change: [Vec<R>; 3],
     /// v* (m/s).
     pub predicted: [Vec<R>; 3],
     /// The solve's iterate, the new half-step velocity (m/s).
@@ -55,12 +58,14 @@ pub struct ImplicitArrays<R> {
 }
 
 impl<R: Real> ImplicitArrays<R> {
-    /// Six vectors and a symmetric block per particle, and a share of the partial dots.
-    pub const BYTES_PER_PARTICLE: usize = (6 * 3 + 6) * std::mem::size_of::<R>();
+    /// Seven vectors and a symmetric block per particle (the partial dots, one pair per
+    /// `DOT_RANGE` particles, add a sixteenth of a byte).
+    pub const BYTES_PER_PARTICLE: usize = (7 * 3 + 6) * std::mem::size_of::<R>();
 
     pub fn with_capacity(capacity: usize) -> Self {
         let v3 = || core::array::from_fn(|_| zeros(capacity));
         Self {
+            viscous_change: v3(),
             predicted: v3(),
             solution: v3(),
             residual: v3(),
@@ -75,6 +80,7 @@ impl<R: Real> ImplicitArrays<R> {
     /// The arrays as views over the first `n` particles.
     pub fn views(&mut self, n: usize) -> ImplicitViews<'_, R> {
         ImplicitViews {
+            viscous_change: vec3_view_mut(&mut self.viscous_change, n),
             predicted: vec3_view_mut(&mut self.predicted, n),
             solution: vec3_view_mut(&mut self.solution, n),
             residual: vec3_view_mut(&mut self.residual, n),
@@ -185,6 +191,9 @@ impl<R: Real> Particles<R> {
             self.velocity[a][i] = R::from_f64(velocity[a]);
             self.velocity_half[a][i] = R::from_f64(velocity[a]);
             self.acceleration[a][i] = R::ZERO;
+            if let Some(implicit) = &mut self.implicit {
+                implicit.viscous_change[a][i] = R::ZERO;
+            }
         }
         self.id[i] = id;
         self.len += 1;

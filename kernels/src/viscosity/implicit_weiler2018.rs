@@ -105,22 +105,28 @@ pub struct PredictorArgs<'a, R> {
     pub velocity: Vec3View<'a, R>,
     /// Pressure and gravity (m/s^2).
     pub acceleration: Vec3View<'a, R>,
+    /// The last step's viscous change of velocity, v - v* (m/s).
+    pub viscous_change: Vec3View<'a, R>,
     /// v* out (m/s).
     pub predicted: Vec3ViewMut<'a, R>,
-    /// The solve's first guess out: v* (m/s).
+    /// The solve's first guess out (m/s).
     pub solution: Vec3ViewMut<'a, R>,
 }
 
-/// v* = v_{n-1/2} + dt (pressure + gravity) for fluid; a boundary particle's own velocity.
+/// v* = v_{n-1/2} + dt (pressure + gravity) for fluid, a boundary particle's own velocity; the
+/// first guess is v* plus the last step's viscous change, which a slowly varying flow repeats
+/// (Weiler et al.'s warm start).
 #[inline(always)]
 pub fn predictor_pass<R: Real>(i: usize, a: &PredictorArgs<R>) {
-    let v = if a.fluid.is_boundary(a.id.at(i)) {
-        vec3(a.velocity.at(i))
+    let (v, guess) = if a.fluid.is_boundary(a.id.at(i)) {
+        let v = vec3(a.velocity.at(i));
+        (v, v)
     } else {
-        vec3(a.velocity_half.at(i)) + vec3(a.acceleration.at(i)) * a.kick_dt
+        let v = vec3(a.velocity_half.at(i)) + vec3(a.acceleration.at(i)) * a.kick_dt;
+        (v, v + vec3(a.viscous_change.at(i)))
     };
     write_vec3(&a.predicted, i, v);
-    write_vec3(&a.solution, i, v);
+    write_vec3(&a.solution, i, guess);
 }
 
 /// Arguments of [`lagged_viscosity_pass`].
@@ -348,6 +354,8 @@ pub struct ViscousAccelerationArgs<'a, R> {
     pub solution: Vec3View<'a, R>,
     /// Pressure and gravity in, plus the implicit viscous acceleration out (m/s^2).
     pub acceleration: Vec3ViewMut<'a, R>,
+    /// v - v* out, the next step's warm start (m/s).
+    pub viscous_change: Vec3ViewMut<'a, R>,
 }
 
 /// a += (v - v*) / dt: leap-frog's kick then lands on the solved half-step velocity.
@@ -356,8 +364,9 @@ pub fn viscous_acceleration_pass<R: Real>(i: usize, a: &ViscousAccelerationArgs<
     if a.fluid.is_boundary(a.id.at(i)) {
         return;
     }
-    let change = (vec3(a.solution.at(i)) - vec3(a.predicted.at(i))) * (R::ONE / a.kick_dt);
-    write_vec3(&a.acceleration, i, vec3(a.acceleration.at(i)) + change);
+    let change = vec3(a.solution.at(i)) - vec3(a.predicted.at(i));
+    write_vec3(&a.viscous_change, i, change);
+    write_vec3(&a.acceleration, i, vec3(a.acceleration.at(i)) + change * (R::ONE / a.kick_dt));
 }
 
 /// Arguments of [`dot_pass`]: two dot products over the same particles.
