@@ -1110,7 +1110,8 @@ impl Ball {
                 arrays: p.implicit.as_mut().expect("allocated").views(n),
             }),
         };
-        let report = Model::<f64>::accelerations::<Open, _, _>(&model, &mut CpuPasses { n }, state).expect("the implicit model reports its solve");
+        let report = Model::<f64>::accelerations::<Open, _, _>(&model, &mut CpuPasses { n }, state)
+            .expect("the implicit model reports its solve");
         let v = (0..n)
             .map(|i| {
                 let a = |k: usize| velocity[k][i] + kick_dt * p.acceleration[k][i];

@@ -383,15 +383,16 @@ fn resume_refuses_what_it_cannot_continue() {
 /// clock carry on from the checkpoint. The capacity fills during the run, so the stop must also
 /// carry the time it filled. With density from the continuity equation the checkpoint carries
 /// each particle's density too; particle shifting, run with it, keeps no state between steps.
+/// With implicit viscosity it carries the warm start of the next solve.
 #[test]
 fn a_jet_stopped_by_its_program_resumes_where_it_was() {
     use coil::scene::DensityEquation::{Continuity, Summation};
-    for (density, shifting) in [(Summation, 0.0), (Continuity, 2.0)] {
-        jet_stopped_by_its_program_resumes_where_it_was(density, shifting);
+    for (density, shifting, implicit) in [(Summation, 0.0, false), (Continuity, 2.0, false), (Continuity, 0.0, true)] {
+        jet_stopped_by_its_program_resumes_where_it_was(density, shifting, implicit);
     }
 }
 
-fn jet_stopped_by_its_program_resumes_where_it_was(density: coil::scene::DensityEquation, shifting: f64) {
+fn jet_stopped_by_its_program_resumes_where_it_was(density: coil::scene::DensityEquation, shifting: f64, implicit: bool) {
     use std::sync::atomic::{AtomicBool, Ordering};
     let mut scene = common::scene(&common::jet_scene(
         r#"nozzle = { shape = "circle", radius_m = 0.004 }"#,
@@ -401,7 +402,11 @@ fn jet_stopped_by_its_program_resumes_where_it_was(density: coil::scene::Density
     scene.simulation.max_fluid_particles = Some(80);
     scene.material.density_equation = density;
     scene.simulation.particle_shifting = shifting;
-    let dir = std::env::temp_dir().join(format!("coil-resume-jet-{density:?}-{}", std::process::id()));
+    if implicit {
+        scene.material.viscosity.solver = coil::scene::ViscositySolver::Implicit;
+        scene.material.viscosity.velocity_gradient = coil::scene::VelocityGradient::OwnDensity;
+    }
+    let dir = std::env::temp_dir().join(format!("coil-resume-jet-{density:?}-{implicit}-{}", std::process::id()));
     let (whole, stopped) = (dir.join("whole"), dir.join("stopped"));
     let done = coil::run::run_on(None, &scene, "jet.toml", &common::quiet_run_options(&whole)).expect("the whole run");
     let filled = done.capacity_reached.expect("the capacity fills").0;
