@@ -3,7 +3,7 @@
 
 use super::{
     short, Boundary, Domain, Material, Nozzle, NozzleMotion, Output, Scene, SceneError, VelocityGradient, ViscosityOperator,
-    ViscositySolver, Walls,
+    ViscositySolver,
 };
 use super::{Precision, SimulationSettings, MAX_HOURGLASS_CONTROL, MAX_PARTICLE_SHIFTING};
 use crate::simulation::time_step::{Limit, StabilityBound};
@@ -287,14 +287,6 @@ impl Check<'_> {
     /// `h`: the support radius (m).
     fn simulation(&self, s: &SimulationSettings, m: &Material, h: f64) -> Checked {
         self.positive("simulation.end_time_s", s.end_time_s)?;
-        if s.walls == Walls::Mirrored && m.viscosity.solver == ViscositySolver::Implicit {
-            return self.fail(
-                "simulation.walls",
-                "\"mirrored\" walls make the implicit viscosity operator non-symmetric, which conjugate gradients cannot solve; \
-                 use walls = \"paper\" or material.viscosity.solver = \"explicit\""
-                    .into(),
-            );
-        }
         self.within(
             "simulation.particle_shifting",
             s.particle_shifting,

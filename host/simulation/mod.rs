@@ -460,7 +460,7 @@ impl<R: Real, M: Model<R>> Schedule<R> for ForcesAndMotion<'_, R, M> {
                 implicit: v.implicit.map(|arrays| ImplicitStep {
                     kick_dt: R::from_f64(self.kick_dt),
                     velocity_half: v.velocity_half.read(),
-                    velocity: v.velocity.read(),
+                    velocity: viscous_velocity.read(),
                     arrays,
                 }),
             },

@@ -63,7 +63,8 @@ pub struct ImplicitStep<'a, R> {
     pub kick_dt: R,
     /// v_{n-1/2} (m/s).
     pub velocity_half: Vec3View<'a, R>,
-    /// The full-step velocity, which boundary particles keep (m/s).
+    /// The velocity the viscous terms read, which boundary particles keep: at rest, or their
+    /// mirror images' ghost velocity under mirrored walls (m/s).
     pub velocity: Vec3View<'a, R>,
     pub arrays: ImplicitViews<'a, R>,
 }

@@ -4,7 +4,7 @@
 //! a few diameters it stays straight.
 
 use super::snapshot::snapshots;
-use crate::scene::{Scene, VelocityGradient, ViscosityOperator};
+use crate::scene::{Scene, VelocityGradient, ViscosityOperator, ViscositySolver};
 use crate::validation::jet_axis::JetAxis;
 
 /// The shipped Newtonian jet.
@@ -48,9 +48,22 @@ pub fn axis_offsets(
     end_time_s: f64,
 ) -> Result<Vec<[f64; 2]>, String> {
     let (axis, scene) = jet_scene(height_over_d, op, hourglass_control, end_time_s)?;
+    offsets_of(&axis, &scene, end_time_s)
+}
+
+/// [`axis_offsets`] of the paper's operator with the own-density gradient (the operator the
+/// implicit solve takes), integrated explicitly or implicitly.
+pub fn own_density_axis_offsets(height_over_d: f64, solver: ViscositySolver, end_time_s: f64) -> Result<Vec<[f64; 2]>, String> {
+    let (axis, mut scene) = jet_scene(height_over_d, ViscosityOperator::Stress, 0.0, end_time_s)?;
+    scene.material.viscosity.velocity_gradient = VelocityGradient::OwnDensity;
+    scene.material.viscosity.solver = solver;
+    offsets_of(&axis, &scene, end_time_s)
+}
+
+fn offsets_of(axis: &JetAxis, scene: &Scene, end_time_s: f64) -> Result<Vec<[f64; 2]>, String> {
     let samples = (end_time_s / SAMPLE_EVERY_S).round() as usize;
     let times: Vec<f64> = (1..=samples).map(|k| k as f64 * SAMPLE_EVERY_S).collect();
-    let snaps = snapshots(&scene, &times, None)?;
+    let snaps = snapshots(scene, &times, None)?;
     Ok(snaps
         .iter()
         .filter_map(|s| {

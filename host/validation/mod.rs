@@ -487,6 +487,158 @@ pub fn jet_buckling(
     })
 }
 
+/// Start-up Poiseuille at `across` with implicit viscosity at `multiple` times Eq. (10)'s
+/// viscous bound, against the explicit solver on the same operator (the paper's with the
+/// own-density gradient) at the bound: the error against Morris et al.'s series may exceed the
+/// explicit solver's by at most 0.005 of the peak (what the larger dt may add).
+pub fn startup_poiseuille_implicit(across: usize, multiple: f64) -> Result<CaseResult, String> {
+    use crate::scene::{VelocityGradient, ViscositySolver};
+    let explicit =
+        Channel { velocity_gradient: VelocityGradient::OwnDensity, ..Channel::morris(across, ViscosityOperator::Stress) };
+    let implicit =
+        Channel { solver: ViscositySolver::Implicit, fixed_dt_s: Some(multiple * explicit.viscous_bound_s()), ..explicit };
+    let e = startup_poiseuille_in(&explicit, None)?;
+    let i = startup_poiseuille_in(&implicit, None)?;
+    Ok(CaseResult {
+        case: format!("start-up Poiseuille, paper's operator (own density), implicit at {multiple} x the bound, {across} across"),
+        measure: format!(
+            "max |u - u_ref| / u_max minus the explicit solver's at the bound: {:.4} against {:.4}; {:.1} s against {:.1} s",
+            i.error, e.error, i.wall_s, e.wall_s
+        ),
+        error: i.error - e.error,
+        tolerance: 0.005,
+        at_least: false,
+        wall_s: i.wall_s + e.wall_s,
+        plot: None,
+    })
+}
+
+/// Steady Poiseuille of the Cross fluid (K = `k_s` s, n = `n`) with implicit viscosity at
+/// `multiple` times the viscous bound: the steady profile within 0.002 of the centre speed of
+/// the explicit solver's on the same operator.
+pub fn cross_poiseuille_implicit(across: usize, k_s: f64, n: f64, multiple: f64) -> Result<CaseResult, String> {
+    use crate::scene::{VelocityGradient, ViscositySolver};
+    let law = CrossLaw { nu_inf_m2_s: 0.25e-6, k_s, n };
+    let explicit = Channel {
+        cross: Some(law),
+        velocity_gradient: VelocityGradient::OwnDensity,
+        ..Channel::morris(across, ViscosityOperator::Stress)
+    };
+    let implicit =
+        Channel { solver: ViscositySolver::Implicit, fixed_dt_s: Some(multiple * explicit.viscous_bound_s()), ..explicit };
+    let end = 0.75 * explicit.gap_m * explicit.gap_m / law.nu_inf_m2_s;
+    let started = Instant::now();
+    let e = simulate(&explicit, &[end])?.remove(0);
+    let explicit_s = started.elapsed().as_secs_f64();
+    let started = Instant::now();
+    let i = simulate(&implicit, &[end])?.remove(0);
+    let implicit_s = started.elapsed().as_secs_f64();
+    let centre = cross_steady_velocity(&explicit, &law, &[0.5 * explicit.gap_m])[0];
+    let difference = e.iter().zip(&i).map(|(a, b)| (a[1] - b[1]).abs()).fold(0.0, f64::max) / centre;
+    Ok(CaseResult {
+        case: format!("steady Cross Poiseuille K = {k_s} s, n = {n}, implicit at {multiple} x the bound, {across} across"),
+        measure: format!(
+            "max |u_implicit - u_explicit| / u_centre at t = {end} s, the explicit solver at the bound on the same operator (own density); {implicit_s:.1} s against {explicit_s:.1} s"
+        ),
+        error: difference,
+        tolerance: 0.002,
+        at_least: false,
+        wall_s: implicit_s + explicit_s,
+        plot: None,
+    })
+}
+
+/// The spreading torus of Fig. 3 with implicit viscosity against the explicit solver on the
+/// same operator (the own-density gradient): each K's spread radius at `time_s` within 1 % of
+/// the explicit run's, and still ordered by K.
+pub fn torus_implicit(spacing_m: f64, time_s: f64) -> Result<Vec<CaseResult>, String> {
+    use crate::scene::{VelocityGradient, ViscositySolver};
+    let mut explicit = crate::scene::Scene::parse(TORUS, "scenes/torus.toml").map_err(|e| e.to_string())?;
+    explicit.material.viscosity.velocity_gradient = VelocityGradient::OwnDensity;
+    let implicit = {
+        let mut s = explicit.clone();
+        s.material.viscosity.solver = ViscositySolver::Implicit;
+        s
+    };
+    let ks = [0.0, 1.0, 10.0, 100.0];
+    let (mut explicit_s, mut implicit_s) = (0.0, 0.0);
+    let mut radii = Vec::new();
+    for k in ks {
+        let started = Instant::now();
+        let e = torus::spread(&explicit, spacing_m, k, time_s)?.1;
+        explicit_s += started.elapsed().as_secs_f64();
+        let started = Instant::now();
+        let i = torus::spread(&implicit, spacing_m, k, time_s)?.1;
+        implicit_s += started.elapsed().as_secs_f64();
+        radii.push((e, i));
+    }
+    let difference = radii.iter().map(|(e, i)| (i - e).abs() / e).fold(0.0, f64::max);
+    let out_of_order = radii.windows(2).filter(|w| !(w[1].1 > w[0].1)).count();
+    let listed: Vec<String> = ks.iter().zip(&radii).map(|(k, (e, i))| format!("K = {k} s: {e:.4} / {i:.4} m")).collect();
+    let case = format!("torus spreading (Fig. 3), implicit viscosity, spacing {spacing_m} m");
+    Ok(vec![
+        CaseResult {
+            case: format!("{case}: against the explicit solver"),
+            measure: format!(
+                "largest relative difference of the spread radius at t = {time_s} s, explicit / implicit: {}; {explicit_s:.0} s explicit, {implicit_s:.0} s implicit",
+                listed.join(", ")
+            ),
+            error: difference,
+            tolerance: 0.01,
+            at_least: false,
+            wall_s: explicit_s + implicit_s,
+            plot: None,
+        },
+        CaseResult {
+            case: format!("{case}: orders by K"),
+            measure: format!("pairs of K = 0, 1, 10, 100 s out of order in the implicit runs' spread radius at t = {time_s} s"),
+            error: out_of_order as f64,
+            tolerance: 0.0,
+            at_least: false,
+            wall_s: 0.0,
+            plot: None,
+        },
+    ])
+}
+
+/// The jet of Fig. 5 with implicit viscosity (the paper's operator with the own-density
+/// gradient): from H/D = 12 it must still buckle (largest offset above D/2); from H/D = 3 its
+/// largest offset must be within 0.03 D of the explicit solver's on the same operator.
+pub fn jet_implicit(height_over_d: f64, end_time_s: f64) -> Result<CaseResult, String> {
+    use crate::scene::ViscositySolver;
+    let buckles = height_over_d >= 10.0;
+    let largest = |o: &[[f64; 2]]| o.iter().map(|p| p[1]).fold(0.0, f64::max);
+    let started = Instant::now();
+    let implicit = largest(&jet::own_density_axis_offsets(height_over_d, ViscositySolver::Implicit, end_time_s)?);
+    let implicit_s = started.elapsed().as_secs_f64();
+    let base = format!("jet, H/D = {height_over_d}, Re = 0.2, paper's operator (own density), implicit viscosity");
+    if buckles {
+        return Ok(CaseResult {
+            case: format!("{base}: buckles"),
+            measure: format!("largest sideways offset / D of the axis, every 0.02 s to {end_time_s} s ({implicit_s:.0} s)"),
+            error: implicit,
+            tolerance: 0.5,
+            at_least: true,
+            wall_s: implicit_s,
+            plot: None,
+        });
+    }
+    let started = Instant::now();
+    let explicit = largest(&jet::own_density_axis_offsets(height_over_d, ViscositySolver::Explicit, end_time_s)?);
+    let explicit_s = started.elapsed().as_secs_f64();
+    Ok(CaseResult {
+        case: format!("{base}: as the explicit solver"),
+        measure: format!(
+            "|largest offset implicit - explicit| / D, every 0.02 s to {end_time_s} s: {implicit:.3} against {explicit:.3} ({implicit_s:.0} s against {explicit_s:.0} s)"
+        ),
+        error: (implicit - explicit).abs(),
+        tolerance: 0.03,
+        at_least: false,
+        wall_s: implicit_s + explicit_s,
+        plot: None,
+    })
+}
+
 /// The viscous thread at `across` particles across D with operator `op`, density by
 /// `density_equation`, negative pressure clamped or not, against the slender-thread solution: the largest relative error of the
 /// downward speed over 12 slabs of the fall, averaged over the frames from 0.5 to 0.7 s.

@@ -5,7 +5,9 @@
 
 use super::scene_word;
 use super::snapshot::snapshots;
-use crate::scene::{DensityKernelKind, Precision, Scene, VelocityGradient, ViscosityOperator, ViscousVelocity, Walls};
+use crate::scene::{
+    DensityKernelKind, Precision, Scene, VelocityGradient, ViscosityOperator, ViscositySolver, ViscousVelocity, Walls,
+};
 use std::f64::consts::PI;
 
 /// Morris et al. 1997's channel: L = 1 mm, nu = 1e-6 m^2/s, F = 2e-4 m/s^2, rho0 = 1000
@@ -36,6 +38,10 @@ pub struct Channel {
     pub viscous_velocity: ViscousVelocity,
     /// The paper's operator's velocity gradient.
     pub velocity_gradient: VelocityGradient,
+    /// How viscosity is integrated in time.
+    pub solver: ViscositySolver,
+    /// A fixed dt (s) in place of the automatic one.
+    pub fixed_dt_s: Option<f64>,
 }
 
 /// The Cross model, Eq. (3), by its constants.
@@ -72,7 +78,15 @@ impl Channel {
             hourglass_control: 0.0,
             viscous_velocity: ViscousVelocity::FullStep,
             velocity_gradient: VelocityGradient::Sph,
+            solver: ViscositySolver::Explicit,
+            fixed_dt_s: None,
         }
+    }
+
+    /// Eq. (10)'s viscous bound for this channel, 0.1 h^2 / (8 nu0) (s).
+    pub fn viscous_bound_s(&self) -> f64 {
+        let h = 2.0 * self.spacing();
+        0.1 * h * h / (8.0 * self.nu0_m2_s)
     }
 
     /// Steady centre-line speed of the Newtonian flow F L^2 / (8 nu) (m/s).
@@ -92,7 +106,8 @@ impl Channel {
         let (l, w) = (self.gap_m, 6.0 * s);
         let (operator, precision, walls) = (scene_word(self.operator), scene_word(self.precision), scene_word(self.walls));
         let (density_kernel, viscous_velocity) = (scene_word(self.density_kernel), scene_word(self.viscous_velocity));
-        let velocity_gradient = scene_word(self.velocity_gradient);
+        let (velocity_gradient, solver) = (scene_word(self.velocity_gradient), scene_word(self.solver));
+        let fixed = self.fixed_dt_s.map(|dt| format!(", fixed_s = {dt:e}")).unwrap_or_default();
         let cross = self
             .cross
             .map(|c| format!("nu_inf_m2_s = {:e}\ncross_k_s = {:e}\ncross_n = {:e}\n", c.nu_inf_m2_s, c.k_s, c.n))
@@ -112,6 +127,7 @@ operator = "{operator}"
 nu0_m2_s = {nu0:e}
 hourglass_control = {hg:e}
 velocity_gradient = "{velocity_gradient}"
+solver = "{solver}"
 {cross}
 [domain]
 min_m = [0.0, {ylo:e}, 0.0]
@@ -121,7 +137,7 @@ periodic = [true, false, true]
 end_time_s = {end_time_s:e}
 precision = "{precision}"
 walls = "{walls}"
-time_step = {{ safety_factor = {sf:e}, allow_above_stability_bound = {above}, viscous_velocity = "{viscous_velocity}" }}
+time_step = {{ safety_factor = {sf:e}, allow_above_stability_bound = {above}, viscous_velocity = "{viscous_velocity}"{fixed} }}
 [[boundary]]
 shape = "box"
 min_m = [0.0, 0.0, 0.0]
@@ -136,7 +152,7 @@ max_m = [{w:e}, {l:e}, {w:e}]
             ylo = -4.0 * s,
             yhi = l + 4.0 * s,
             sf = self.safety_factor,
-            above = self.safety_factor > 1.0,
+            above = self.safety_factor > 1.0 || self.fixed_dt_s.is_some(),
             hg = self.hourglass_control,
         );
         Scene::parse(&text, "poiseuille (generated)").expect("the generated channel is a valid scene")

@@ -3,8 +3,9 @@
 use super::poiseuille::{Channel, CrossLaw};
 use super::viscous_thread::Treatment;
 use super::{
-    cross_poiseuille, cross_poiseuille_in, huppert_spreading, hydrostatic_tank, jet_buckling, startup_poiseuille,
-    startup_poiseuille_in, taylor_green, torus_ordering, viscous_thread, CaseResult, HOURGLASS_CONTROL,
+    cross_poiseuille, cross_poiseuille_implicit, cross_poiseuille_in, huppert_spreading, hydrostatic_tank, jet_buckling,
+    jet_implicit, startup_poiseuille, startup_poiseuille_implicit, startup_poiseuille_in, taylor_green, torus_implicit,
+    torus_ordering, viscous_thread, CaseResult, HOURGLASS_CONTROL,
 };
 use crate::output::write_atomically;
 use crate::scene::ViscosityOperator;
@@ -116,6 +117,11 @@ fn cases(quick: bool, out: &Path) -> Vec<Case<'_>> {
     for &across in resolutions {
         cases.push(Case::one(Group::Poiseuille, true, move || startup_poiseuille_in(&controlled(across), out)));
     }
+    let implicit_multiples: &[f64] = if quick { &[10.0] } else { &[10.0, 30.0, 100.0] };
+    for &multiple in implicit_multiples {
+        cases.push(Case::one(Group::Poiseuille, true, move || startup_poiseuille_implicit(20, multiple)));
+    }
+    cases.push(Case::one(Group::Cross, true, move || cross_poiseuille_implicit(cross_across, 10.0, 0.5, 30.0)));
     for op in [ViscosityOperator::Stress, ViscosityOperator::Morris] {
         for (k, n) in cross_laws {
             cases.push(Case::one(Group::Cross, !paper(op), move || cross_poiseuille(cross_across, op, k, n, out)));
@@ -136,6 +142,7 @@ fn cases(quick: bool, out: &Path) -> Vec<Case<'_>> {
     }
     let torus_spacing = if quick { 0.04 } else { 0.03 };
     cases.push(Case::one(Group::Torus, true, move || torus_ordering(torus_spacing, 0.3)));
+    cases.push(Case::new(Group::Torus, true, move || torus_implicit(torus_spacing, 0.3)));
     let release_across = if quick { 8 } else { 10 };
     for (op, hg) in operators {
         cases.push(Case::new(Group::Huppert, !paper(op), move || huppert_spreading(release_across, op, hg, out)));
@@ -164,6 +171,9 @@ fn cases(quick: bool, out: &Path) -> Vec<Case<'_>> {
         .flat_map(|(op, hg)| [(12.0, op, hg, true, false), (3.0, op, hg, false, false)]);
         for (height_over_d, op, hg, buckles, binding) in paper_jets.into_iter().chain(fig6) {
             cases.push(Case::one(Group::Jet, binding, move || jet_buckling(height_over_d, op, hg, buckles, 0.8, out)));
+        }
+        for height_over_d in [12.0, 3.0] {
+            cases.push(Case::one(Group::Jet, true, move || jet_implicit(height_over_d, 0.8)));
         }
     }
     cases
@@ -226,11 +236,15 @@ mod tests {
         let binding =
             |group, quick| -> Vec<bool> { cases(quick, out).iter().filter(|c| c.group == group).map(|c| c.binding).collect() };
         // Stress at 10, 20, 30; Laplacian and Morris at each; the controlled paper's at each.
-        assert_eq!(binding(Group::Poiseuille, false), [false, false, true, true, true, true, true, true, true, true, true, true]);
+        assert_eq!(
+            binding(Group::Poiseuille, false),
+            [false, false, true, true, true, true, true, true, true, true, true, true, true, true, true]
+        );
         // The paper's operator, with or without the control, binds nowhere in Huppert's case.
         assert_eq!(binding(Group::Huppert, true), [false, false, true, true]);
-        // Fig. 5's two paper jets bind; Fig. 6's six comparisons do not; quick runs no jet.
-        assert_eq!(binding(Group::Jet, false), [true, true, false, false, false, false, false, false]);
+        // Fig. 5's two paper jets bind; Fig. 6's six comparisons do not; the implicit solver's
+        // two bind; quick runs no jet.
+        assert_eq!(binding(Group::Jet, false), [true, true, false, false, false, false, false, false, true, true]);
         assert!(binding(Group::Jet, true).is_empty());
         // The thread, each operator, density and pressure treatment at 5 across (and 8, 12 in
         // full), is shown for comparison; the shipped jets' formulation binds from 8 across.
@@ -238,6 +252,8 @@ mod tests {
         (full[25], full[38]) = (true, true);
         assert_eq!(binding(Group::Thread, true), [false; 13]);
         assert_eq!(binding(Group::Thread, false), full);
-        assert_eq!(cases(true, out).len(), 8 + 9 + 1 + 4 + 1 + 4 + 13);
+        // The torus: its ordering, and the implicit solver against the explicit.
+        assert_eq!(binding(Group::Torus, true), [true, true]);
+        assert_eq!(cases(true, out).len(), 9 + 10 + 1 + 4 + 2 + 4 + 13);
     }
 }

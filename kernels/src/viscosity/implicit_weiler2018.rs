@@ -10,8 +10,10 @@
 //! (`velocity_gradient::OwnDensity`) A is symmetric and negative semidefinite, so I - dt A is
 //! symmetric positive definite for every dt, as conjugate gradients need. The viscosity is
 //! lagged: each particle's nu is read once a step from v*'s shear rate (Eq. 2, 3), which leaves
-//! A linear. Boundary particles keep their velocity: their rows are the identity and their
-//! entries of the residual and of the search direction stay zero.
+//! A linear. Boundary particles keep their velocity through the solve (at rest, or under
+//! mirrored walls the ghost velocity of the step's start): their rows are the identity and
+//! their entries of the residual and of the search direction stay zero, which keeps A
+//! symmetric where mirrored ghosts solved with the fluid would not.
 //!
 //! The passes of one step, in order: the acceleration pass with [`PressureAndGravity`], then
 //! [`predictor_pass`], [`lagged_viscosity_pass`], [`system_block_pass`], for the start
