@@ -4,7 +4,7 @@
 
 use super::scene_word;
 use super::snapshot::{snapshots_from, Snapshot};
-use crate::scene::{Scene, ViscosityOperator};
+use crate::scene::{Scene, ViscosityOperator, ViscositySolver};
 
 /// |g| (m/s^2).
 const GRAVITY: f64 = 9.81;
@@ -30,6 +30,9 @@ pub struct Release {
     pub sound_speed_m_s: f64,
     /// The current is followed until Huppert's radius reaches this many R0.
     pub final_spread: f64,
+    /// With a solver: the paper's operator with the own-density gradient, integrated by it, in
+    /// place of `operator` as given.
+    pub own_density: Option<ViscositySolver>,
 }
 
 impl Release {
@@ -47,6 +50,7 @@ impl Release {
             // (g H0 / c^2 = 1 %) left a compressibility error of 0.01, 20 a few thousandths.
             sound_speed_m_s: 20.0,
             final_spread: 2.0,
+            own_density: None,
         }
     }
 
@@ -94,6 +98,7 @@ gravity_m_s2 = [0.0, {g:e}, 0.0]
 operator = "{operator}"
 nu0_m2_s = {nu:e}
 hourglass_control = {hg:e}
+{implicit}
 [domain]
 min_m = [{lo:e}, {floor:e}, {lo:e}]
 max_m = [{reach:e}, {top:e}, {reach:e}]
@@ -111,9 +116,13 @@ height_m = {h:e}
 "#,
             c = self.sound_speed_m_s,
             g = -GRAVITY,
-            operator = scene_word(self.operator),
+            operator = scene_word(if self.own_density.is_some() { ViscosityOperator::Stress } else { self.operator }),
             nu = self.nu_m2_s,
             hg = self.hourglass_control,
+            implicit = self
+                .own_density
+                .map(|solver| format!("velocity_gradient = \"own_density\"\nsolver = \"{}\"", scene_word(solver)))
+                .unwrap_or_default(),
             lo = -reach,
             floor = -4.0 * s,
             top = 2.0 * h,

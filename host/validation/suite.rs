@@ -3,9 +3,9 @@
 use super::poiseuille::{Channel, CrossLaw};
 use super::viscous_thread::Treatment;
 use super::{
-    cross_poiseuille, cross_poiseuille_implicit, cross_poiseuille_in, huppert_spreading, hydrostatic_tank, jet_buckling,
-    jet_implicit, startup_poiseuille, startup_poiseuille_implicit, startup_poiseuille_in, taylor_green, torus_implicit,
-    torus_ordering, viscous_thread, CaseResult, HOURGLASS_CONTROL,
+    cross_poiseuille, cross_poiseuille_implicit, cross_poiseuille_in, huppert_implicit, huppert_spreading, hydrostatic_tank,
+    jet_buckling, jet_implicit, startup_poiseuille, startup_poiseuille_implicit, startup_poiseuille_in, taylor_green,
+    torus_implicit, torus_ordering, viscous_thread, CaseResult, HOURGLASS_CONTROL,
 };
 use crate::output::write_atomically;
 use crate::scene::ViscosityOperator;
@@ -147,6 +147,7 @@ fn cases(quick: bool, out: &Path) -> Vec<Case<'_>> {
     for (op, hg) in operators {
         cases.push(Case::new(Group::Huppert, !paper(op), move || huppert_spreading(release_across, op, hg, out)));
     }
+    cases.push(Case::one(Group::Huppert, true, move || huppert_implicit(release_across)));
     let thread_resolutions: &[f64] = if quick { &[5.0] } else { &[5.0, 8.0, 12.0] };
     for &across in thread_resolutions {
         for op in [ViscosityOperator::Stress, ViscosityOperator::Laplacian, ViscosityOperator::Morris] {
@@ -241,7 +242,7 @@ mod tests {
             [false, false, true, true, true, true, true, true, true, true, true, true, true, true, true]
         );
         // The paper's operator, with or without the control, binds nowhere in Huppert's case.
-        assert_eq!(binding(Group::Huppert, true), [false, false, true, true]);
+        assert_eq!(binding(Group::Huppert, true), [false, false, true, true, true]);
         // Fig. 5's two paper jets bind; Fig. 6's six comparisons do not; the implicit solver's
         // two bind; quick runs no jet.
         assert_eq!(binding(Group::Jet, false), [true, true, false, false, false, false, false, false, true, true]);
@@ -254,6 +255,6 @@ mod tests {
         assert_eq!(binding(Group::Thread, false), full);
         // The torus: its ordering, and the implicit solver against the explicit.
         assert_eq!(binding(Group::Torus, true), [true, true]);
-        assert_eq!(cases(true, out).len(), 9 + 10 + 1 + 4 + 2 + 4 + 13);
+        assert_eq!(cases(true, out).len(), 9 + 10 + 1 + 4 + 2 + 5 + 13);
     }
 }
