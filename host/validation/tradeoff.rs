@@ -7,7 +7,7 @@
 use super::poiseuille::{Channel, CrossLaw};
 use super::{cross_poiseuille_in, operator_label, startup_poiseuille_in, HOURGLASS_CONTROL};
 use crate::output::plot::{Axis, Chart, Curve, Line, PALETTE};
-use crate::scene::{DensityKernelKind, Precision, VelocityGradient, ViscosityOperator, ViscousVelocity, Walls};
+use crate::scene::{DensityKernelKind, Precision, VelocityGradient, ViscosityOperator, ViscositySolver, ViscousVelocity, Walls};
 use crate::statistics::Sorted;
 use std::time::Instant;
 
@@ -110,6 +110,22 @@ pub fn trials(quick: bool) -> Vec<Trial> {
             let setting = format!("half step, {f} x the Eq. (10) bound, {}", operator_label(op, hg));
             add("start-up", "viscous velocity", setting, half_step(channel));
         }
+    }
+    // Implicit viscosity: the viscous term no longer bounds dt; the same operator explicitly at
+    // the bound for reference.
+    let own_density =
+        Channel { velocity_gradient: VelocityGradient::OwnDensity, ..Channel::morris(base_across, ViscosityOperator::Stress) };
+    add("start-up", "viscosity solver", "explicit at the bound, paper's operator (own density)".into(), own_density);
+    let multiples: &[f64] = if quick { &[10.0] } else { &[1.0, 10.0, 30.0, 100.0] };
+    for &m in multiples {
+        let channel =
+            Channel { solver: ViscositySolver::Implicit, fixed_dt_s: Some(m * own_density.viscous_bound_s()), ..own_density };
+        add(
+            "start-up",
+            "viscosity solver",
+            format!("implicit, {m} x the Eq. (10) bound, paper's operator (own density)"),
+            channel,
+        );
     }
     let machs: &[f64] = if quick { &[0.1] } else { &[0.1, 1e-3, 1e-4] };
     for &mach in machs {
