@@ -81,7 +81,7 @@ impl<Rh> ImplicitStressModel<Rh> {
             neighborhood: s.neighborhood,
             fluid,
             rheology: self.rheology,
-            velocity: x.predicted.read(),
+            velocity: x.solution.read(),
             density,
             viscosity,
         });

@@ -42,6 +42,8 @@ pub struct Channel {
     pub solver: ViscositySolver,
     /// A fixed dt (s) in place of the automatic one.
     pub fixed_dt_s: Option<f64>,
+    /// The implicit solve's relative residual.
+    pub implicit_tolerance: f64,
 }
 
 /// The Cross model, Eq. (3), by its constants.
@@ -80,6 +82,7 @@ impl Channel {
             velocity_gradient: VelocityGradient::Sph,
             solver: ViscositySolver::Explicit,
             fixed_dt_s: None,
+            implicit_tolerance: 1e-3,
         }
     }
 
@@ -128,6 +131,7 @@ nu0_m2_s = {nu0:e}
 hourglass_control = {hg:e}
 velocity_gradient = "{velocity_gradient}"
 solver = "{solver}"
+implicit = {{ tolerance = {tolerance:e} }}
 {cross}
 [domain]
 min_m = [0.0, {ylo:e}, 0.0]
@@ -154,6 +158,7 @@ max_m = [{w:e}, {l:e}, {w:e}]
             sf = self.safety_factor,
             above = self.safety_factor > 1.0 || self.fixed_dt_s.is_some(),
             hg = self.hourglass_control,
+            tolerance = self.implicit_tolerance,
         );
         Scene::parse(&text, "poiseuille (generated)").expect("the generated channel is a valid scene")
     }

@@ -121,7 +121,7 @@ fn cases(quick: bool, out: &Path) -> Vec<Case<'_>> {
     for &multiple in implicit_multiples {
         cases.push(Case::one(Group::Poiseuille, true, move || startup_poiseuille_implicit(20, multiple)));
     }
-    cases.push(Case::one(Group::Cross, true, move || cross_poiseuille_implicit(cross_across, 10.0, 0.5, 30.0)));
+    cases.push(Case::one(Group::Cross, true, move || cross_poiseuille_implicit(cross_across, 10.0, 0.5, 10.0)));
     for op in [ViscosityOperator::Stress, ViscosityOperator::Morris] {
         for (k, n) in cross_laws {
             cases.push(Case::one(Group::Cross, !paper(op), move || cross_poiseuille(cross_across, op, k, n, out)));

@@ -127,6 +127,17 @@ pub fn trials(quick: bool) -> Vec<Trial> {
             channel,
         );
     }
+    if !quick {
+        for tolerance in [1e-2, 1e-6] {
+            let channel = Channel {
+                solver: ViscositySolver::Implicit,
+                fixed_dt_s: Some(10.0 * own_density.viscous_bound_s()),
+                implicit_tolerance: tolerance,
+                ..own_density
+            };
+            add("start-up", "viscosity solver", format!("implicit, 10 x the bound, tolerance {tolerance:e}"), channel);
+        }
+    }
     let machs: &[f64] = if quick { &[0.1] } else { &[0.1, 1e-3, 1e-4] };
     for &mach in machs {
         let c = base.newtonian_peak() / mach;
