@@ -291,9 +291,11 @@ struct GpuPasses<'g> {
     count: View<'static, u32>,
     threads: u32,
     result: Result<(), CudaError>,
-    /// The implicit solve's partial dot products on the device, and their host copy.
-    partial_dots: Option<(&'g DeviceArray<[f64; 2]>, &'g mut [[f64; 2]])>,
+    partial_dots: Option<PartialDots<'g>>,
 }
+
+/// The implicit solve's partial dot products on the device, and their host copy.
+type PartialDots<'g> = (&'g DeviceArray<[f64; 2]>, &'g mut [[f64; 2]]);
 
 impl GpuPasses<'_> {
     fn run<A: Copy>(&mut self, name: &'static str, args: A) {

@@ -12,7 +12,7 @@ pub mod time_step;
 use crate::cpu::neighbor_grid::NeighborGrid;
 use crate::cpu::CpuBackend;
 use crate::scene::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, InitialParticles};
-use crate::scene::{DensityKernelKind, ImplicitViscosity, Scene, ViscositySolver, ViscousVelocity, Walls};
+use crate::scene::{DensityKernelKind, Scene, ViscositySolver, ViscousVelocity, Walls};
 use crate::simulation::inlet::Inlet;
 use crate::simulation::model::{ImplicitStep, Model, ParticleState, SolveReport};
 use crate::simulation::particles::{HostParticles, Particles};
@@ -55,18 +55,27 @@ pub struct Instability {
     /// The first non-finite value a frame would have held (field, particle id, value), where
     /// that is what stopped the run.
     pub non_finite: Option<String>,
-    /// The implicit viscosity solve that missed its tolerance, and its settings, where that is
-    /// what stopped the run.
-    pub unconverged_solve: Option<(SolveReport, ImplicitViscosity)>,
+    /// The implicit viscosity solve that missed its tolerance, where that is what stopped the
+    /// run.
+    pub unconverged_solve: Option<Box<UnconvergedSolve>>,
+}
+
+/// An implicit viscosity solve that stopped above its tolerance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UnconvergedSolve {
+    pub iterations: u32,
+    /// The last residual's norm over that of v*.
+    pub relative_residual: f64,
+    pub tolerance: f64,
 }
 
 impl fmt::Display for Instability {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if let Some((report, settings)) = &self.unconverged_solve {
+        if let Some(solve) = &self.unconverged_solve {
             return write!(
                 f,
                 "the implicit viscosity solve did not converge at step {} (t = {:.6e} s, dt = {:.3e} s): after {} iterations its residual was {:.3e} of its first, above the tolerance {:.1e}. Raise material.viscosity.implicit.max_iterations, lower dt (simulation.time_step.safety_factor or fixed_s), or set material.viscosity.implicit.on_no_convergence = \"warn\" to go on and count such steps.",
-                self.step, self.time_s, self.dt_s, report.iterations, report.relative_residual, settings.tolerance
+                self.step, self.time_s, self.dt_s, solve.iterations, solve.relative_residual, solve.tolerance
             );
         }
         match &self.non_finite {

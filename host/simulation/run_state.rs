@@ -1,7 +1,7 @@
 //! The state of a run that is the same on every backend: the fluid's constants, the physics
 //! variant, the clock and time step, the inlets, the particle counts and the guard.
 
-use super::{Diagnostics, Instability};
+use super::{Diagnostics, Instability, UnconvergedSolve};
 use crate::scene::{DensityKernelKind, ImplicitViscosity, NoConvergence, ViscousVelocity};
 use crate::simulation::inlet::Inlet;
 use crate::simulation::model::{Model, SolveReport};
@@ -207,7 +207,11 @@ impl<R: Real, M: Model<R>> RunState<R, M> {
         match self.implicit {
             Some(settings) if settings.on_no_convergence == NoConvergence::Stop => {
                 let mut diagnosis = self.instability(0, None);
-                diagnosis.unconverged_solve = Some((report, settings));
+                diagnosis.unconverged_solve = Some(Box::new(UnconvergedSolve {
+                    iterations: report.iterations,
+                    relative_residual: report.relative_residual,
+                    tolerance: settings.tolerance,
+                }));
                 Err(diagnosis)
             }
             _ => Ok(()),
