@@ -592,3 +592,41 @@ fn the_fingerprint_follows_physics_and_ignores_the_rest() {
     moved.inlets[0].position_m[0] += 0.001;
     assert_ne!(fingerprint(&moved), base);
 }
+
+/// An implicit viscosity solve held below its tolerance stops the run with exit 3 and a
+/// diagnosis naming what to change; told to go on, the run finishes and counts such steps.
+#[test]
+fn an_unconverged_implicit_solve_stops_the_run_or_is_counted() {
+    let dir = std::env::temp_dir().join(format!("coil-unconverged-{}", std::process::id()));
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/newtonian_jet.toml");
+    let run = |on: &str, out: &str| {
+        coil(&[
+            "run",
+            scene.to_str().expect("utf-8"),
+            "--out",
+            dir.join(out).to_str().expect("utf-8"),
+            "--quiet",
+            "--set",
+            "simulation.end_time_s=0.01",
+            "--set",
+            "material.viscosity.solver=implicit",
+            "--set",
+            "material.viscosity.velocity_gradient=own_density",
+            "--set",
+            "material.viscosity.implicit={ tolerance = 1e-9, max_iterations = 1 }",
+            "--set",
+            &format!("material.viscosity.implicit.on_no_convergence={on}"),
+        ])
+    };
+    let stopped = run("stop", "stopped");
+    let stderr = String::from_utf8_lossy(&stopped.stderr);
+    assert_eq!(stopped.status.code(), Some(3), "{stderr}");
+    assert!(stderr.contains("did not converge") && stderr.contains("material.viscosity.implicit.max_iterations"), "{stderr}");
+    assert!(dir.join("stopped/frame_000000.vtu").is_file(), "the first frame is kept");
+    let warned = run("warn", "warned");
+    let stdout = String::from_utf8_lossy(&warned.stdout);
+    assert!(warned.status.success(), "{}", String::from_utf8_lossy(&warned.stderr));
+    let line = stdout.lines().find(|l| l.starts_with("implicit viscosity")).expect("the summary's solve line");
+    assert!(line.contains("1 at most") && !line.contains(" 0 step(s) unconverged"), "{line}");
+    std::fs::remove_dir_all(&dir).ok();
+}
