@@ -18,11 +18,11 @@
 //! symmetric where mirrored ghosts solved with the fluid would not.
 //!
 //! The passes of one step, in order: the acceleration pass with [`PressureAndGravity`], then
-//! [`predictor_pass`], [`lagged_viscosity_pass`], [`system_block_pass`], for the start
-//! [`implicit_stress_pass`] and [`system_product_pass`] on the first guess and
-//! [`cg_start_pass`]; per iteration [`implicit_stress_pass`] and [`system_product_pass`] on the
-//! search direction, [`dot_pass`], [`cg_step_pass`], [`dot_pass`], [`cg_direction_pass`]; last
-//! [`viscous_acceleration_pass`].
+//! [`predictor_pass`], [`lagged_viscosity_pass`], [`system_block_pass`]; [`implicit_stress_pass`],
+//! [`system_product_pass`], [`cg_start_pass`] and [`dot_pass`] on v* (the residual the
+//! tolerance is relative to), then the same on the first guess; per iteration
+//! [`implicit_stress_pass`] and [`system_product_pass`] on the search direction, [`dot_pass`],
+//! [`cg_step_pass`], [`dot_pass`], [`cg_direction_pass`]; last [`viscous_acceleration_pass`].
 
 use super::ViscousOperator;
 use crate::cell_grid::{Neighborhood, Neighbors};
