@@ -37,6 +37,10 @@ use coil_kernels::topology::{Open, Periodic, Topology};
 use coil_kernels::velocity_gradient::{GradientEstimate, KernelSum, OwnDensity};
 use coil_kernels::view::{View, ViewMut};
 use coil_kernels::viscosity::hourglass_ganzenmuller2015::{HourglassControlledStress, VelocityGradientArgs};
+use coil_kernels::viscosity::implicit_weiler2018::{
+    CgDirectionArgs, CgStartArgs, CgStepArgs, DotArgs, ImplicitStressArgs, LaggedViscosityArgs, PredictorArgs,
+    PressureAndGravity, SystemBlockArgs, SystemProductArgs, ViscousAccelerationArgs,
+};
 use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
 use coil_kernels::viscosity::laplacian_morris1997::ShearViscosityArgs;
 use coil_kernels::viscosity::laplacian_muller2003::VelocityLaplacian;
@@ -107,6 +111,12 @@ fn ptx_entry_parameters_match_the_host_argument_layouts() {
         add("leapfrog", size_of::<LeapfrogArgs<R, T>>());
         add("shifting", size_of::<ShiftingArgs<R, Neighborhood<T>>>());
         add("shift", size_of::<ShiftArgs<R, T>>());
+        add("acceleration_pressure", size_of::<AccelerationArgs<R, PressureAndGravity, Neighborhood<T>>>());
+        add("lagged_viscosity_newtonian", size_of::<LaggedViscosityArgs<R, Newtonian<R>, Neighborhood<T>>>());
+        add("lagged_viscosity_cross", size_of::<LaggedViscosityArgs<R, Cross<R>, Neighborhood<T>>>());
+        add("implicit_stress", size_of::<ImplicitStressArgs<R, Neighborhood<T>>>());
+        add("system_block", size_of::<SystemBlockArgs<R, Neighborhood<T>>>());
+        add("system_product", size_of::<SystemProductArgs<R, Neighborhood<T>>>());
     }
     fn per_precision<R: Real>(expected: &mut Vec<(String, Vec<usize>)>) {
         per_topology::<R, Open>(expected);
@@ -120,6 +130,12 @@ fn ptx_entry_parameters_match_the_host_argument_layouts() {
         add(format!("gather_{r}"), vec![count, size_of::<View<u32>>(), size_of::<View<R>>(), size_of::<ViewMut<R>>()]);
         add(format!("append_{r}"), vec![count, 4, size_of::<View<R>>(), size_of::<ViewMut<R>>()]);
         add(format!("diagnostics_{r}"), vec![count, 4, size_of::<DiagnosticsArgs<R>>(), size_of::<ViewMut<StateFigures>>()]);
+        add(format!("predictor_{r}"), vec![count, size_of::<PredictorArgs<R>>()]);
+        add(format!("cg_start_{r}"), vec![count, size_of::<CgStartArgs<R>>()]);
+        add(format!("cg_step_{r}"), vec![count, size_of::<CgStepArgs<R>>()]);
+        add(format!("cg_direction_{r}"), vec![count, size_of::<CgDirectionArgs<R>>()]);
+        add(format!("viscous_acceleration_{r}"), vec![count, size_of::<ViscousAccelerationArgs<R>>()]);
+        add(format!("dots_{r}"), vec![count, size_of::<DotArgs<R>>(), size_of::<ViewMut<[f64; 2]>>()]);
     }
     let view = size_of::<View<u32>>();
     let mut expected = vec![
