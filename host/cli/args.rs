@@ -166,9 +166,9 @@ pub enum Command {
         out: PathBuf,
     },
     /// Measure what each speed-for-accuracy knob buys on the two Poiseuille cases (resolution,
-    /// operator, dt safety factor, the velocity the viscous terms read, the viscosity solver, sound speed, precision,
-    /// walls, density kernel): error against the reference and the median wall time of each
-    /// trial's repeats; writes tradeoff.md, tradeoff.csv and the plot of error against time, the
+    /// operator, dt safety factor, the velocity the viscous terms read, the viscosity solver,
+    /// sound speed, precision, walls, density kernel): error against the reference and the
+    /// median wall time of each trial's repeats; writes tradeoff.md, tradeoff.csv and the plot of error against time, the
     /// Pareto front drawn (tradeoff.png, .svg, .plot.csv).
     Tradeoff {
         /// A few coarse trials (about 13 s a repeat) instead of the full sweep (about 5 minutes a
