@@ -5,6 +5,7 @@
 //! backend. Each kernel invocation writes only the entries its index owns (or claims through an
 //! atomic counter), which is what makes the shared mutable view sound.
 
+use crate::vec3::SymTensor;
 use core::marker::PhantomData;
 
 /// Panics off the device where `i` is past a view of `len` elements.
@@ -245,6 +246,21 @@ impl<T> Clone for SymTensorView<'_, T> {
 }
 impl<T> Copy for SymTensorView<'_, T> {}
 
+impl<T: Copy> SymTensorView<'_, T> {
+    /// Entry `i` as a tensor.
+    #[inline(always)]
+    pub fn at(&self, i: usize) -> SymTensor<T> {
+        SymTensor {
+            xx: self.xx.at(i),
+            yy: self.yy.at(i),
+            zz: self.zz.at(i),
+            xy: self.xy.at(i),
+            xz: self.xz.at(i),
+            yz: self.yz.at(i),
+        }
+    }
+}
+
 /// Mutable counterpart of [`SymTensorView`].
 #[repr(C)]
 #[derive(Debug)]
@@ -264,6 +280,20 @@ impl<T> Clone for SymTensorViewMut<'_, T> {
 impl<T> Copy for SymTensorViewMut<'_, T> {}
 
 impl<'a, T: Copy> SymTensorViewMut<'a, T> {
+    /// Writes entry `i`.
+    ///
+    /// # Safety
+    /// No other invocation may read or write entry `i` concurrently.
+    #[inline(always)]
+    pub unsafe fn write(&self, i: usize, t: SymTensor<T>) {
+        self.xx.write(i, t.xx);
+        self.yy.write(i, t.yy);
+        self.zz.write(i, t.zz);
+        self.xy.write(i, t.xy);
+        self.xz.write(i, t.xz);
+        self.yz.write(i, t.yz);
+    }
+
     /// The same arrays, read-only: what a later pass reads of what this one wrote.
     #[inline(always)]
     pub fn read(&self) -> SymTensorView<'a, T> {

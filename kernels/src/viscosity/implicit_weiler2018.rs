@@ -51,24 +51,6 @@ fn write_vec3<R: Real>(view: &Vec3ViewMut<R>, i: usize, v: Vec3<R>) {
     unsafe { view.write(i, [v.x, v.y, v.z]) };
 }
 
-#[inline(always)]
-fn sym_at<R: Real>(s: &SymTensorView<R>, i: usize) -> SymTensor<R> {
-    SymTensor { xx: s.xx.at(i), yy: s.yy.at(i), zz: s.zz.at(i), xy: s.xy.at(i), xz: s.xz.at(i), yz: s.yz.at(i) }
-}
-
-#[inline(always)]
-fn write_sym<R: Real>(s: &SymTensorViewMut<R>, i: usize, t: SymTensor<R>) {
-    // SAFETY: invocation i owns entry i.
-    unsafe {
-        s.xx.write(i, t.xx);
-        s.yy.write(i, t.yy);
-        s.zz.write(i, t.zz);
-        s.xy.write(i, t.xy);
-        s.xz.write(i, t.xz);
-        s.yz.write(i, t.yz);
-    }
-}
-
 /// The acceleration pass's operator when viscosity is solved apart: no viscous term, so the
 /// pass gives pressure (Eq. 7) and gravity.
 #[repr(C)]
@@ -178,7 +160,8 @@ pub struct ImplicitStressArgs<'a, R, N = Neighborhood<'a, Open>> {
 pub fn implicit_stress_pass<R: Real, N: Neighbors>(i: usize, a: &ImplicitStressArgs<R, N>) {
     let grad = OwnDensity::velocity_gradient(i, &a.neighborhood, &a.velocity, &a.density, &a.fluid);
     let tau = rate_of_deformation(grad).scaled(a.density.at(i) * a.viscosity.at(i));
-    write_sym(&a.stress, i, tau);
+    // SAFETY: invocation i owns entry i.
+    unsafe { a.stress.write(i, tau) };
 }
 
 /// Arguments of [`system_block_pass`].
@@ -220,7 +203,8 @@ pub fn system_block_pass<R: Real, N: Neighbors>(i: usize, a: &SystemBlockArgs<R,
         let m = a.fluid.mass;
         block = block + (own + pairs).scaled(a.kick_dt * m * m);
     }
-    write_sym(&a.block, i, block);
+    // SAFETY: invocation i owns entry i.
+    unsafe { a.block.write(i, block) };
 }
 
 /// |g|^2 I + g g^T.
@@ -256,12 +240,12 @@ pub fn system_product_pass<R: Real, N: Neighbors>(i: usize, a: &SystemProductArg
         Vec3::zero()
     } else {
         let rho_i = a.density.at(i);
-        let own = sym_at(&a.stress, i).scaled(R::ONE / (rho_i * rho_i));
+        let own = a.stress.at(i).scaled(R::ONE / (rho_i * rho_i));
         let mut sum = Vec3::zero();
         a.neighborhood.for_each_neighbor(i, a.fluid.kernels.h2, |j, r_ij, r2| {
             let rho_j = a.density.at(j);
             let g = a.fluid.kernels.spiky_gradient(r_ij, r2);
-            sum += (own + sym_at(&a.stress, j).scaled(R::ONE / (rho_j * rho_j))).dot(g);
+            sum += (own + a.stress.at(j).scaled(R::ONE / (rho_j * rho_j))).dot(g);
         });
         vec3(a.velocity.at(i)) - sum * (a.fluid.mass * a.kick_dt)
     };
@@ -297,7 +281,7 @@ pub fn cg_start_pass<R: Real>(i: usize, a: &CgStartArgs<R>) {
         (Vec3::zero(), Vec3::zero())
     } else {
         let r = vec3(a.predicted.at(i)) - vec3(a.product.at(i));
-        (r, precondition(sym_at(&a.block, i), r))
+        (r, precondition(a.block.at(i), r))
     };
     write_vec3(&a.residual, i, r);
     write_vec3(&a.preconditioned, i, z);
@@ -327,7 +311,7 @@ pub fn cg_step_pass<R: Real>(i: usize, a: &CgStepArgs<R>) {
     let r = vec3(a.residual.at(i)) - vec3(a.product.at(i)) * a.alpha;
     write_vec3(&a.solution, i, x);
     write_vec3(&a.residual, i, r);
-    write_vec3(&a.preconditioned, i, precondition(sym_at(&a.block, i), r));
+    write_vec3(&a.preconditioned, i, precondition(a.block.at(i), r));
 }
 
 /// Arguments of [`cg_direction_pass`].

@@ -40,14 +40,7 @@ pub fn stress_pass<R: Real, Rh: Rheology<R>, G: GradientEstimate, N: Neighbors>(
     let grad = G::velocity_gradient(i, &a.neighborhood, &a.velocity, &a.density, &a.fluid);
     let tau = stress(rate_of_deformation(grad), a.density.at(i), &a.rheology);
     // SAFETY: invocation i owns entry i.
-    unsafe {
-        a.stress.xx.write(i, tau.xx);
-        a.stress.yy.write(i, tau.yy);
-        a.stress.zz.write(i, tau.zz);
-        a.stress.xy.write(i, tau.xy);
-        a.stress.xz.write(i, tau.xz);
-        a.stress.yz.write(i, tau.yz);
-    }
+    unsafe { a.stress.write(i, tau) };
 }
 
 /// The paper's operator, Eq. (9): sum_j m_j (tau_i / rho_i^2 + tau_j / rho_j^2) · grad_i W,
@@ -61,9 +54,7 @@ pub struct StressDivergence<'a, R> {
 impl<'a, R: Real> StressDivergence<'a, R> {
     #[inline(always)]
     fn stress_over_density2(&self, i: usize, density: R) -> SymTensor<R> {
-        let s = &self.stress;
-        SymTensor { xx: s.xx.at(i), yy: s.yy.at(i), zz: s.zz.at(i), xy: s.xy.at(i), xz: s.xz.at(i), yz: s.yz.at(i) }
-            .scaled(R::ONE / (density * density))
+        self.stress.at(i).scaled(R::ONE / (density * density))
     }
 }
 
