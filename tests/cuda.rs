@@ -41,8 +41,9 @@ use coil_kernels::viscosity::implicit_weiler2018::{
     CgDirectionArgs, CgStartArgs, CgStepArgs, DotArgs, ImplicitStressArgs, LaggedViscosityArgs, PredictorArgs,
     PressureAndGravity, SystemBlockArgs, SystemProductArgs, ViscousAccelerationArgs,
 };
-use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
-use coil_kernels::viscosity::laplacian_morris1997::ShearViscosityArgs;
+use coil_kernels::viscosity::laplacian_morris1997::{
+    MorrisSystemBlockArgs, MorrisSystemProductArgs, MorrisViscosity, ShearViscosityArgs,
+};
 use coil_kernels::viscosity::laplacian_muller2003::VelocityLaplacian;
 use coil_kernels::viscosity::stress_andrade2014::StressArgs;
 use coil_kernels::viscosity::stress_andrade2014::StressDivergence;
@@ -117,6 +118,10 @@ fn ptx_entry_parameters_match_the_host_argument_layouts() {
         add("implicit_stress", size_of::<ImplicitStressArgs<R, Neighborhood<T>>>());
         add("system_block", size_of::<SystemBlockArgs<R, Neighborhood<T>>>());
         add("system_product", size_of::<SystemProductArgs<R, Neighborhood<T>>>());
+        add("system_block_morris", size_of::<MorrisSystemBlockArgs<R, Newtonian<R>, Neighborhood<T>>>());
+        add("system_block_morris_shear", size_of::<MorrisSystemBlockArgs<R, View<R>, Neighborhood<T>>>());
+        add("system_product_morris", size_of::<MorrisSystemProductArgs<R, Newtonian<R>, Neighborhood<T>>>());
+        add("system_product_morris_shear", size_of::<MorrisSystemProductArgs<R, View<R>, Neighborhood<T>>>());
     }
     fn per_precision<R: Real>(expected: &mut Vec<(String, Vec<usize>)>) {
         per_topology::<R, Open>(expected);
@@ -443,27 +448,42 @@ fn a_jet_on_the_gpu_agrees_with_the_cpu() {
 }
 
 /// The jet with implicit viscosity: the solve's passes, its fixed-order dot products read back
-/// every iteration, and its arrays on the device move the particles as on the CPU.
+/// every iteration, and its arrays on the device move the particles as on the CPU; with the
+/// paper's operator and with Morris's, constant and shear-thinning.
 #[test]
 fn implicit_viscosity_on_the_gpu_agrees_with_the_cpu() {
-    use coil::simulation::implicit_viscosity::ImplicitStressModel;
-    let mut scene = small_jet();
-    scene.material.viscosity.solver = coil::scene::ViscositySolver::Implicit;
-    scene.material.viscosity.velocity_gradient = coil::scene::VelocityGradient::OwnDensity;
-    let model = ImplicitStressModel { rheology: Newtonian { nu0: 0.001 }, tolerance: 1e-3, max_iterations: 100 };
-    for engine in engines() {
-        let (cpu, on_gpu) = both_with::<f64, _>(engine.open(), &scene, model, 300, 2e-4);
-        assert!(cpu.run.solves.iterations > 0, "the solve never iterated: the test would not see it");
-        if matches!(engine, Engine::Emulated) {
-            assert_eq!(on_gpu.run.solves, cpu.run.solves, "{engine:?}: the solves' iterations and residuals");
+    use coil::scene::{ViscosityOperator, ViscositySolver};
+    use coil::simulation::implicit_viscosity::{ImplicitModel, MorrisOperator, ShearThinningMorrisOperator, StressOperator};
+    fn agree<M: Model<f64>>(scene: &Scene, operator: M, what: &str) {
+        for engine in engines() {
+            let (cpu, on_gpu) = both_with::<f64, _>(engine.open(), scene, operator, 300, 2e-4);
+            assert!(cpu.run.solves.iterations > 0, "{what}: the solve never iterated: the test would not see it");
+            if matches!(engine, Engine::Emulated) {
+                assert_eq!(on_gpu.run.solves, cpu.run.solves, "{engine:?}, {what}: the solves' iterations and residuals");
+            }
+            let worst = largest_position_difference(&state_by_id(cpu.particles()), &state_by_id(on_gpu.particles()));
+            println!(
+                "{engine:?}, implicit jet, {what}: {:.1} iterations a step, largest position difference after 300 steps {worst:.3e} m",
+                cpu.run.solves.mean_iterations()
+            );
+            assert!(worst <= engine.f64_tolerance_m(), "{engine:?}, implicit jet, {what}: positions differ by {worst:.3e} m");
         }
-        let worst = largest_position_difference(&state_by_id(cpu.particles()), &state_by_id(on_gpu.particles()));
-        println!(
-            "{engine:?}, implicit jet: {:.1} iterations a step, largest position difference after 300 steps {worst:.3e} m",
-            cpu.run.solves.mean_iterations()
-        );
-        assert!(worst <= engine.f64_tolerance_m(), "{engine:?}, implicit jet: positions differ by {worst:.3e} m");
     }
+    let (tolerance, max_iterations) = (1e-3, 100);
+    let mut paper = small_jet();
+    paper.material.viscosity.solver = ViscositySolver::Implicit;
+    paper.material.viscosity.velocity_gradient = coil::scene::VelocityGradient::OwnDensity;
+    let operator = StressOperator(Newtonian { nu0: 0.001 });
+    agree(&paper, ImplicitModel { operator, tolerance, max_iterations }, "paper's operator");
+    let mut morris = small_jet();
+    morris.material.viscosity.solver = ViscositySolver::Implicit;
+    morris.material.viscosity.operator = ViscosityOperator::Morris;
+    let operator = MorrisOperator(Newtonian { nu0: 0.001 });
+    agree(&morris, ImplicitModel { operator, tolerance, max_iterations }, "Morris");
+    morris.material.viscosity.cross_k_s = 1.0;
+    morris.material.viscosity.nu_inf_m2_s = Some(1e-4);
+    let operator = ShearThinningMorrisOperator(coil::simulation::model::cross_law::<f64>(&morris.material.viscosity));
+    agree(&morris, ImplicitModel { operator, tolerance, max_iterations }, "Morris, Cross");
 }
 
 /// The jet with density from the continuity equation: its density is state that the sort

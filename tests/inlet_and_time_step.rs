@@ -87,6 +87,51 @@ fn the_nozzle_tube_pushes_the_jet_at_its_speed_when_the_jet_is_blocked() {
     assert!(slowest < 0.25, "the plate stops the jet (slowest {slowest} m/s)");
 }
 
+/// With implicit viscosity the fluid in the tube is a fixed value of the solve, as walls are:
+/// the solve leaves it at the jet velocity (no viscous change), while the fluid below, slowed
+/// by the plate, still drags on its neighbors.
+#[test]
+fn the_implicit_solve_holds_the_tube_fluid_at_the_jet_velocity() {
+    use coil::simulation::implicit_viscosity::{ImplicitModel, StressOperator};
+    let text = common::set(
+        &jet_scene("nozzle = { shape = \"circle\", radius_m = 0.006 }", "[[boundary]]\nshape = \"plate\"\nheight_m = -0.012"),
+        &[
+            "material.viscosity.nu0_m2_s=0.01",
+            "material.viscosity.solver=\"implicit\"",
+            "material.viscosity.velocity_gradient=\"own_density\"",
+        ],
+    );
+    let scene = common::scene(&text);
+    let initial = initial_particles(&scene, "jet.toml").expect("valid");
+    let model = ImplicitModel { operator: StressOperator(Newtonian { nu0: 0.01 }), tolerance: 1e-6, max_iterations: 1000 };
+    let mut sim = Simulation::<f64, _>::new(&scene, &initial, model);
+    while sim.run.time < 0.05 {
+        sim.step().expect("stable");
+    }
+    // The solve of the last step saw the tubes of that step's start; the particles moved since.
+    let tube = sim.run.inlet_tubes().next().expect("one inlet");
+    let p = sim.particles();
+    let x = p.position_view();
+    let change = &p.implicit.as_ref().expect("allocated").viscous_change;
+    let size = |i: usize| (0..3).map(|k| change[k][i] * change[k][i]).sum::<f64>().sqrt();
+    let fluid: Vec<usize> = (0..p.len()).filter(|&i| !sim.run.fluid.is_boundary(p.id[i])).collect();
+    // One spacing (2 mm) inside the exit, the particles were in the tube at the last solve too.
+    let deep: Vec<usize> = fluid
+        .iter()
+        .copied()
+        .filter(|&i| {
+            let [a, b, c] = x.at(i);
+            tube.contains([a, b - 0.002, c])
+        })
+        .collect();
+    assert!(!deep.is_empty(), "fluid in the tube");
+    for &i in &deep {
+        assert_eq!(size(i), 0.0, "particle {i} in the tube changed by viscosity");
+    }
+    let largest = fluid.iter().map(|&i| size(i)).fold(0.0, f64::max);
+    assert!(largest > 1e-4, "the solve slows the jet below the exit (largest change {largest} m/s)");
+}
+
 #[test]
 fn inlet_stops_at_the_particle_budget_and_moving_nozzle_follows_waypoints() {
     let text = common::set(

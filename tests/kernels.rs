@@ -1086,12 +1086,12 @@ impl Ball {
     /// m^2/s, no pressure and no gravity: the new velocities and how the solve went.
     fn implicit_step(&mut self, velocity: &[Vec<f64>; 3], kick_dt: f64, tolerance: f64) -> (Vec<Vec3<f64>>, SolveReport) {
         use coil::cpu::CpuPasses;
-        use coil::simulation::implicit_viscosity::ImplicitStressModel;
+        use coil::simulation::implicit_viscosity::{ImplicitModel, StressOperator};
         use coil::simulation::model::{ImplicitStep, Model, ParticleState};
         use coil::simulation::particles::{stress_view_mut, vec3_view, vec3_view_mut, view_mut};
         let (fluid, p) = (self.fluid, &mut self.particles);
         let n = p.len();
-        let model = ImplicitStressModel { rheology: Newtonian { nu0: 0.1 }, tolerance, max_iterations: 10_000 };
+        let model = ImplicitModel { operator: StressOperator(Newtonian { nu0: 0.1 }), tolerance, max_iterations: 10_000 };
         let velocity_view = vec3_view(velocity, n);
         let state = ParticleState {
             neighborhood: self.grid.neighborhood(vec3_view(&p.position, n), Open),
@@ -1108,6 +1108,9 @@ impl Ball {
                 velocity_half: velocity_view,
                 velocity: velocity_view,
                 arrays: p.implicit.as_mut().expect("allocated").views(n),
+                position: vec3_view(&p.position, n),
+                inlets: &[],
+                time: 0.0,
             }),
         };
         let report = Model::<f64>::accelerations::<Open, _, _>(&model, &mut CpuPasses { n }, state)
@@ -1196,6 +1199,86 @@ fn the_implicit_system_is_the_papers_operator_and_its_preconditioner_its_diagona
     eprintln!("dt {dt:.2e} s, dt times the largest row sum {scale:.2e}: block error {block_error:.2e}, product error {product_error:.2e} m/s");
     assert!(block_error < 1e-12 * scale, "the preconditioner's blocks differ from the operator's by {block_error}");
     assert!(product_error < 1e-12 * scale, "(I - dt A) v differs from the operator's matrix by {product_error} m/s");
+}
+
+/// With Morris's operator the implicit system is Morris's matrix: the product (one neighbor
+/// pass) agrees with it and the preconditioner's blocks are its diagonal blocks, with the
+/// constant viscosity and with a per-particle one of the same value.
+#[test]
+fn the_implicit_morris_system_is_morris_matrix_and_its_preconditioner_its_diagonal_blocks() {
+    use coil::simulation::particles::vec3_view;
+    use coil_kernels::viscosity::laplacian_morris1997::{
+        morris_system_block_pass, morris_system_product_pass, MorrisSystemBlockArgs, MorrisSystemProductArgs, MorrisViscosity,
+    };
+    let (dof, [_, _, _, a]) = free_surface_viscous_matrices();
+    let mut ball = Ball::new();
+    let dt = 10.0 * ball.viscous_bound();
+    let (fluid, p) = (ball.fluid, &mut ball.particles);
+    let n = p.len();
+    let nb = ball.grid.neighborhood(vec3_view(&p.position, n), Open);
+    let density = View::new(&p.density[..n]);
+    let id = View::new(&p.id[..n]);
+    p.viscosity.as_mut().expect("allocated")[..n].fill(0.1);
+    let per_particle = View::new(&p.viscosity.as_ref().expect("allocated")[..n]);
+    let mut arrays = p.implicit.take().expect("allocated");
+    let x = arrays.views(n);
+    let v = scrambled_velocity(n);
+    let velocity = vec3_view(&v, n);
+    let scale = (0..dof).map(|r| (0..dof).map(|c| a[r * dof + c].abs()).sum::<f64>()).fold(0.0, f64::max) * dt;
+    // The same passes for either viscosity type.
+    macro_rules! errors {
+        ($viscosity:expr) => {{
+            let block = MorrisSystemBlockArgs {
+                neighborhood: nb,
+                fluid,
+                kick_dt: dt,
+                id,
+                density,
+                viscosity: $viscosity,
+                block: x.block,
+            };
+            let product = MorrisSystemProductArgs {
+                neighborhood: nb,
+                fluid,
+                kick_dt: dt,
+                id,
+                density,
+                operator: MorrisViscosity { velocity, viscosity: $viscosity },
+                product: x.product,
+            };
+            (0..n).for_each(|i| morris_system_block_pass(i, &block));
+            (0..n).for_each(|i| morris_system_product_pass(i, &product));
+            let b = x.block.read();
+            let mut block_error = 0.0f64;
+            for i in 0..n {
+                let got = [
+                    [b.xx.at(i), b.xy.at(i), b.xz.at(i)],
+                    [b.xy.at(i), b.yy.at(i), b.yz.at(i)],
+                    [b.xz.at(i), b.yz.at(i), b.zz.at(i)],
+                ];
+                for r in 0..3 {
+                    for c in 0..3 {
+                        let want = if r == c { 1.0 } else { 0.0 } - dt * a[(3 * i + r) * dof + 3 * i + c];
+                        block_error = block_error.max((got[r][c] - want).abs());
+                    }
+                }
+            }
+            let mut product_error = 0.0f64;
+            for row in 0..dof {
+                let av: f64 = (0..dof).map(|c| a[row * dof + c] * v[c % 3][c / 3]).sum();
+                let want = v[row % 3][row / 3] - dt * av;
+                product_error = product_error.max((x.product.at(row / 3)[row % 3] - want).abs());
+            }
+            (block_error, product_error)
+        }};
+    }
+    for (what, (block_error, product_error)) in
+        [("constant", errors!(Newtonian { nu0: 0.1 })), ("per particle", errors!(per_particle))]
+    {
+        eprintln!("{what} viscosity, dt times the largest row sum {scale:.2e}: block error {block_error:.2e}, product error {product_error:.2e} m/s");
+        assert!(block_error < 1e-12 * scale, "{what}: the preconditioner's blocks differ from Morris's by {block_error}");
+        assert!(product_error < 1e-12 * scale, "{what}: (I - dt A) v differs from Morris's matrix by {product_error} m/s");
+    }
 }
 
 /// Backward Euler on a symmetric negative semidefinite operator: from 1 to 1000 times Eq. (10)'s

@@ -195,13 +195,16 @@ fn neighbor_search_equals_brute_force() {
 /// Also with implicit viscosity, whose dot products are summed over fixed ranges in order.
 #[test]
 fn results_do_not_depend_on_the_thread_count_or_the_calling_thread() {
-    use coil::simulation::implicit_viscosity::ImplicitStressModel;
+    use coil::simulation::implicit_viscosity::{ImplicitModel, StressOperator};
     let text = common::set(&common::box_scene(0.02, [0.3, 0.3, 0.2], [0.12, 0.2, 0.2], ""), &[GRAVITY]);
     let cross = Cross { nu0: 0.05, nu_inf: 0.005, k: 1.0, n: 1.0 };
     same_results_on_any_thread_count(&text, StressModel(cross, KernelSum));
     let implicit =
         common::set(&text, &["material.viscosity.solver=\"implicit\"", "material.viscosity.velocity_gradient=\"own_density\""]);
-    same_results_on_any_thread_count(&implicit, ImplicitStressModel { rheology: cross, tolerance: 1e-3, max_iterations: 100 });
+    same_results_on_any_thread_count(
+        &implicit,
+        ImplicitModel { operator: StressOperator(cross), tolerance: 1e-3, max_iterations: 100 },
+    );
 }
 
 fn same_results_on_any_thread_count<M: Model<f64>>(text: &str, model: M) {

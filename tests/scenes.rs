@@ -73,6 +73,7 @@ fn bad_scenes_exit_2_naming_file_and_field() {
         ),
         ("operator = \"stress\"", "operator = \"stress\"\nvelocity_gradient = \"bonet\"", "velocity_gradient"),
         ("operator = \"stress\"", "operator = \"stress\"\nsolver = \"implicit\"", "material.viscosity.solver"),
+        ("operator = \"stress\"", "operator = \"laplacian\"\nsolver = \"implicit\"", "material.viscosity.solver"),
         (
             "operator = \"stress\"",
             "operator = \"stress\"\nvelocity_gradient = \"own_density\"\nsolver = \"implicit\"\nimplicit = { tolerance = 2.0 }",

@@ -32,7 +32,10 @@ use coil_kernels::viscosity::implicit_weiler2018::{
     ImplicitStressArgs, LaggedViscosityArgs, PredictorArgs, SystemBlockArgs, SystemProductArgs, ViscousAccelerationArgs,
     DOT_RANGE,
 };
-use coil_kernels::viscosity::laplacian_morris1997::{shear_viscosity_pass, ShearViscosityArgs};
+use coil_kernels::viscosity::laplacian_morris1997::{
+    morris_system_block_pass, morris_system_product_pass, shear_viscosity_pass, MorrisSystemBlockArgs, MorrisSystemProductArgs,
+    ParticleViscosity, ShearViscosityArgs,
+};
 use coil_kernels::viscosity::stress_andrade2014::{stress_pass, StressArgs};
 use coil_kernels::viscosity::ViscousOperator;
 use coil_kernels::Real;
@@ -244,6 +247,12 @@ impl<R: Real, T: Topology, N: Neighbors + Sync> Passes<R, T, N> for CpuPasses {
     }
     fn system_product(&mut self, args: SystemProductArgs<'_, R, N>) {
         launch(self.n, |i| system_product_pass(i, &args));
+    }
+    fn morris_system_block<Nu: ParticleViscosity<R>>(&mut self, args: MorrisSystemBlockArgs<'_, R, Nu, N>) {
+        launch(self.n, |i| morris_system_block_pass(i, &args));
+    }
+    fn morris_system_product<Nu: ParticleViscosity<R>>(&mut self, args: MorrisSystemProductArgs<'_, R, Nu, N>) {
+        launch(self.n, |i| morris_system_product_pass(i, &args));
     }
     fn cg_start(&mut self, args: CgStartArgs<'_, R>) {
         launch(self.n, |i| cg_start_pass(i, &args));

@@ -36,7 +36,9 @@ use coil_kernels::viscosity::implicit_weiler2018::{
     CgDirectionArgs, CgStartArgs, CgStepArgs, DotArgs, ImplicitStressArgs, LaggedViscosityArgs, PredictorArgs, SystemBlockArgs,
     SystemProductArgs, ViscousAccelerationArgs, DOT_RANGE,
 };
-use coil_kernels::viscosity::laplacian_morris1997::ShearViscosityArgs;
+use coil_kernels::viscosity::laplacian_morris1997::{
+    MorrisSystemBlockArgs, MorrisSystemProductArgs, ParticleViscosity, ShearViscosityArgs,
+};
 use coil_kernels::viscosity::stress_andrade2014::StressArgs;
 use coil_kernels::viscosity::ViscousOperator;
 use coil_kernels::Real;
@@ -360,6 +362,18 @@ impl<R: Real, T: Topology> Passes<R, T, Neighborhood<'static, T>> for GpuPasses<
     }
     fn system_product(&mut self, args: SystemProductArgs<'_, R, Neighborhood<'static, T>>) {
         self.run(kernel::<R>("system_product", "", T::NAME), args);
+    }
+    fn morris_system_block<Nu: ParticleViscosity<R>>(
+        &mut self,
+        args: MorrisSystemBlockArgs<'_, R, Nu, Neighborhood<'static, T>>,
+    ) {
+        self.run(kernel::<R>("system_block", Nu::OPERATOR_NAME, T::NAME), args);
+    }
+    fn morris_system_product<Nu: ParticleViscosity<R>>(
+        &mut self,
+        args: MorrisSystemProductArgs<'_, R, Nu, Neighborhood<'static, T>>,
+    ) {
+        self.run(kernel::<R>("system_product", Nu::OPERATOR_NAME, T::NAME), args);
     }
     fn cg_start(&mut self, args: CgStartArgs<'_, R>) {
         self.run(kernel::<R>("cg_start", "", ""), args);

@@ -255,8 +255,8 @@ pub enum ViscositySolver {
     #[default]
     Explicit,
     /// By backward Euler, solved with conjugate gradients (Weiler et al. 2018) on the paper's
-    /// operator with the own-density velocity gradient; dt is bounded by sound and flow speed
-    /// only.
+    /// operator with the own-density velocity gradient or on Morris's; dt is bounded by sound
+    /// and flow speed only.
     Implicit,
 }
 

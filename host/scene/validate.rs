@@ -220,11 +220,17 @@ impl Check<'_> {
             );
         }
         if v.solver == ViscositySolver::Implicit {
-            if v.operator != ViscosityOperator::Stress || v.velocity_gradient != VelocityGradient::OwnDensity {
+            let symmetric = match v.operator {
+                ViscosityOperator::Stress => v.velocity_gradient == VelocityGradient::OwnDensity && v.hourglass_control == 0.0,
+                ViscosityOperator::Morris => true,
+                ViscosityOperator::Laplacian => false,
+            };
+            if !symmetric {
                 return self.fail(
                     "material.viscosity.solver",
-                    "\"implicit\" solves the paper's operator with velocity_gradient = \"own_density\" (operator = \"stress\"), \
-                     the form whose matrix is symmetric, as conjugate gradients need; set those, or solver = \"explicit\""
+                    "\"implicit\" solves the paper's operator with velocity_gradient = \"own_density\" (operator = \"stress\") \
+                     or Morris's (operator = \"morris\"), the forms whose matrices are symmetric, as conjugate gradients need; \
+                     set one of those, or solver = \"explicit\""
                         .into(),
                 );
             }

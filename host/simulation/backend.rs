@@ -24,7 +24,9 @@ use coil_kernels::viscosity::implicit_weiler2018::{
     CgDirectionArgs, CgStartArgs, CgStepArgs, DotArgs, ImplicitStressArgs, LaggedViscosityArgs, PredictorArgs, SystemBlockArgs,
     SystemProductArgs, ViscousAccelerationArgs,
 };
-use coil_kernels::viscosity::laplacian_morris1997::ShearViscosityArgs;
+use coil_kernels::viscosity::laplacian_morris1997::{
+    MorrisSystemBlockArgs, MorrisSystemProductArgs, ParticleViscosity, ShearViscosityArgs,
+};
 use coil_kernels::viscosity::stress_andrade2014::StressArgs;
 use coil_kernels::viscosity::ViscousOperator;
 use coil_kernels::Real;
@@ -51,6 +53,8 @@ pub trait Passes<R: Real, T: Topology, N: Neighbors> {
     fn implicit_stress(&mut self, args: ImplicitStressArgs<'_, R, N>);
     fn system_block(&mut self, args: SystemBlockArgs<'_, R, N>);
     fn system_product(&mut self, args: SystemProductArgs<'_, R, N>);
+    fn morris_system_block<Nu: ParticleViscosity<R>>(&mut self, args: MorrisSystemBlockArgs<'_, R, Nu, N>);
+    fn morris_system_product<Nu: ParticleViscosity<R>>(&mut self, args: MorrisSystemProductArgs<'_, R, Nu, N>);
     fn cg_start(&mut self, args: CgStartArgs<'_, R>);
     fn cg_step(&mut self, args: CgStepArgs<'_, R>);
     fn cg_direction(&mut self, args: CgDirectionArgs<'_, R>);

@@ -471,6 +471,9 @@ impl<R: Real, M: Model<R>> Schedule<R> for ForcesAndMotion<'_, R, M> {
                     velocity_half: v.velocity_half.read(),
                     velocity: viscous_velocity.read(),
                     arrays,
+                    position: v.position.read(),
+                    inlets: run.inlets(),
+                    time: run.time,
                 }),
             },
         );

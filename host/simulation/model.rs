@@ -6,12 +6,14 @@
 
 use crate::scene::{Precision, Scene, VelocityGradient, Viscosity, ViscosityOperator, ViscositySolver};
 use crate::simulation::backend::{ImplicitViews, Passes};
-use crate::simulation::implicit_viscosity::ImplicitStressModel;
+use crate::simulation::implicit_viscosity::{ImplicitModel, MorrisOperator, ShearThinningMorrisOperator, StressOperator};
+use crate::simulation::inlet::Inlet;
 pub use crate::simulation::particles::ModelFields;
 use coil_kernels::acceleration::AccelerationArgs;
 use coil_kernels::cell_grid::{Neighborhood, Neighbors};
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
+use coil_kernels::nozzle::NozzleTube;
 use coil_kernels::renormalization_bonet1999::Renormalized;
 use coil_kernels::topology::{Open, Topology};
 use coil_kernels::velocity_gradient::{GradientEstimate, KernelSum, OwnDensity};
@@ -67,6 +69,19 @@ pub struct ImplicitStep<'a, R> {
     /// mirror images' ghost velocity under mirrored walls (m/s).
     pub velocity: Vec3View<'a, R>,
     pub arrays: ImplicitViews<'a, R>,
+    /// Particle positions (m), which say who is inside a nozzle's tube.
+    pub position: Vec3View<'a, f64>,
+    /// The run's inlets, whose tubes set the velocity of the fluid inside them.
+    pub inlets: &'a [Inlet],
+    /// The step's start (s), where the tubes are.
+    pub time: f64,
+}
+
+impl<R: Real> ImplicitStep<'_, R> {
+    /// Each inlet's nozzle tube at the step's start.
+    pub fn tubes(&self) -> impl Iterator<Item = NozzleTube<R>> + '_ {
+        self.inlets.iter().map(|inlet| inlet.tube(self.time))
+    }
 }
 
 /// What the acceleration passes read and write, as views a backend built over its own memory.
@@ -116,10 +131,19 @@ pub fn with_model<R: Real, W: WithModel>(scene: &Scene, work: W) -> W::Output {
     let hourglass = R::from_f64(v.hourglass_control);
     if v.solver == ViscositySolver::Implicit {
         let (tolerance, max_iterations) = (v.implicit.tolerance, v.implicit.max_iterations);
-        return if v.is_newtonian() {
-            work.with::<R, _>(ImplicitStressModel { rheology: Newtonian { nu0 }, tolerance, max_iterations })
-        } else {
-            work.with::<R, _>(ImplicitStressModel { rheology: cross_law(v), tolerance, max_iterations })
+        return match (v.operator, v.is_newtonian()) {
+            (ViscosityOperator::Morris, true) => {
+                work.with::<R, _>(ImplicitModel { operator: MorrisOperator(Newtonian { nu0 }), tolerance, max_iterations })
+            }
+            (ViscosityOperator::Morris, false) => work.with::<R, _>(ImplicitModel {
+                operator: ShearThinningMorrisOperator(cross_law(v)),
+                tolerance,
+                max_iterations,
+            }),
+            (_, true) => {
+                work.with::<R, _>(ImplicitModel { operator: StressOperator(Newtonian { nu0 }), tolerance, max_iterations })
+            }
+            (_, false) => work.with::<R, _>(ImplicitModel { operator: StressOperator(cross_law(v)), tolerance, max_iterations }),
         };
     }
     match (v.operator, v.is_newtonian()) {

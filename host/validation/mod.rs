@@ -487,20 +487,40 @@ pub fn jet_buckling(
     })
 }
 
+/// The channel of `operator` at `across` that the implicit solver can take: the paper's with
+/// the own-density gradient, or Morris's.
+fn implicit_ready(across: usize, operator: ViscosityOperator) -> Channel {
+    use crate::scene::VelocityGradient;
+    let velocity_gradient =
+        if operator == ViscosityOperator::Stress { VelocityGradient::OwnDensity } else { VelocityGradient::Sph };
+    Channel { velocity_gradient, ..Channel::morris(across, operator) }
+}
+
+/// `operator`'s name in the implicit cases.
+fn implicit_operator_name(operator: ViscosityOperator) -> &'static str {
+    if operator == ViscosityOperator::Stress {
+        "paper's operator (own density)"
+    } else {
+        "Morris's operator"
+    }
+}
+
 /// Start-up Poiseuille at `across` with implicit viscosity at `multiple` times Eq. (10)'s
 /// viscous bound, against the explicit solver on the same operator (the paper's with the
-/// own-density gradient) at the bound: the error against Morris et al.'s series may exceed the
-/// explicit solver's by at most 0.005 of the peak (what the larger dt may add).
-pub fn startup_poiseuille_implicit(across: usize, multiple: f64) -> Result<CaseResult, String> {
-    use crate::scene::{VelocityGradient, ViscositySolver};
-    let explicit =
-        Channel { velocity_gradient: VelocityGradient::OwnDensity, ..Channel::morris(across, ViscosityOperator::Stress) };
+/// own-density gradient, or Morris's) at the bound: the error against Morris et al.'s series may
+/// exceed the explicit solver's by at most 0.005 of the peak (what the larger dt may add).
+pub fn startup_poiseuille_implicit(across: usize, operator: ViscosityOperator, multiple: f64) -> Result<CaseResult, String> {
+    use crate::scene::ViscositySolver;
+    let explicit = implicit_ready(across, operator);
     let implicit =
         Channel { solver: ViscositySolver::Implicit, fixed_dt_s: Some(multiple * explicit.viscous_bound_s()), ..explicit };
     let e = startup_poiseuille_in(&explicit, None)?;
     let i = startup_poiseuille_in(&implicit, None)?;
     Ok(CaseResult {
-        case: format!("start-up Poiseuille, paper's operator (own density), implicit at {multiple} x the bound, {across} across"),
+        case: format!(
+            "start-up Poiseuille, {}, implicit at {multiple} x the bound, {across} across",
+            implicit_operator_name(operator)
+        ),
         measure: format!(
             "max |u - u_ref| / u_max minus the explicit solver's at the bound: {:.4} against {:.4}; {:.1} s against {:.1} s",
             i.error, e.error, i.wall_s, e.wall_s
@@ -516,14 +536,16 @@ pub fn startup_poiseuille_implicit(across: usize, multiple: f64) -> Result<CaseR
 /// Steady Poiseuille of the Cross fluid (K = `k_s` s, n = `n`) with implicit viscosity at
 /// `multiple` times the viscous bound: the steady profile within 0.002 of the centre speed of
 /// the explicit solver's on the same operator.
-pub fn cross_poiseuille_implicit(across: usize, k_s: f64, n: f64, multiple: f64) -> Result<CaseResult, String> {
-    use crate::scene::{VelocityGradient, ViscositySolver};
+pub fn cross_poiseuille_implicit(
+    across: usize,
+    operator: ViscosityOperator,
+    k_s: f64,
+    n: f64,
+    multiple: f64,
+) -> Result<CaseResult, String> {
+    use crate::scene::ViscositySolver;
     let law = CrossLaw { nu_inf_m2_s: 0.25e-6, k_s, n };
-    let explicit = Channel {
-        cross: Some(law),
-        velocity_gradient: VelocityGradient::OwnDensity,
-        ..Channel::morris(across, ViscosityOperator::Stress)
-    };
+    let explicit = Channel { cross: Some(law), ..implicit_ready(across, operator) };
     let implicit =
         Channel { solver: ViscositySolver::Implicit, fixed_dt_s: Some(multiple * explicit.viscous_bound_s()), ..explicit };
     let end = 0.75 * explicit.gap_m * explicit.gap_m / law.nu_inf_m2_s;
@@ -536,9 +558,12 @@ pub fn cross_poiseuille_implicit(across: usize, k_s: f64, n: f64, multiple: f64)
     let centre = cross_steady_velocity(&explicit, &law, &[0.5 * explicit.gap_m])[0];
     let difference = e.iter().zip(&i).map(|(a, b)| (a[1] - b[1]).abs()).fold(0.0, f64::max) / centre;
     Ok(CaseResult {
-        case: format!("steady Cross Poiseuille K = {k_s} s, n = {n}, implicit at {multiple} x the bound, {across} across"),
+        case: format!(
+            "steady Cross Poiseuille K = {k_s} s, n = {n}, {}, implicit at {multiple} x the bound, {across} across",
+            implicit_operator_name(operator)
+        ),
         measure: format!(
-            "max |u_implicit - u_explicit| / u_centre at t = {end} s, the explicit solver at the bound on the same operator (own density); {implicit_s:.1} s against {explicit_s:.1} s"
+            "max |u_implicit - u_explicit| / u_centre at t = {end} s, the explicit solver at the bound on the same operator; {implicit_s:.1} s against {explicit_s:.1} s"
         ),
         error: difference,
         tolerance: 0.002,

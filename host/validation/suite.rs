@@ -118,10 +118,16 @@ fn cases(quick: bool, out: &Path) -> Vec<Case<'_>> {
         cases.push(Case::one(Group::Poiseuille, true, move || startup_poiseuille_in(&controlled(across), out)));
     }
     let implicit_multiples: &[f64] = if quick { &[10.0] } else { &[10.0, 30.0, 100.0] };
-    for &multiple in implicit_multiples {
-        cases.push(Case::one(Group::Poiseuille, true, move || startup_poiseuille_implicit(20, multiple)));
+    for op in [ViscosityOperator::Stress, ViscosityOperator::Morris] {
+        // Morris's operator couples the fluid to the mirrored ghosts more strongly than the
+        // paper's, and the solve holds the ghosts at the step's start: at 100 times the bound
+        // that lag breaks the start-up channel (docs/implicit-viscosity.md).
+        let multiples = implicit_multiples.iter().filter(move |&&m| paper(op) || m <= 30.0);
+        for &multiple in multiples {
+            cases.push(Case::one(Group::Poiseuille, true, move || startup_poiseuille_implicit(20, op, multiple)));
+        }
+        cases.push(Case::one(Group::Cross, true, move || cross_poiseuille_implicit(cross_across, op, 10.0, 0.5, 10.0)));
     }
-    cases.push(Case::one(Group::Cross, true, move || cross_poiseuille_implicit(cross_across, 10.0, 0.5, 10.0)));
     for op in [ViscosityOperator::Stress, ViscosityOperator::Morris] {
         for (k, n) in cross_laws {
             cases.push(Case::one(Group::Cross, !paper(op), move || cross_poiseuille(cross_across, op, k, n, out)));

@@ -37,7 +37,9 @@ use crate::viscosity::implicit_weiler2018::{
     ImplicitStressArgs, LaggedViscosityArgs, PredictorArgs, PressureAndGravity, SystemBlockArgs, SystemProductArgs,
     ViscousAccelerationArgs,
 };
-use crate::viscosity::laplacian_morris1997::MorrisViscosity;
+use crate::viscosity::laplacian_morris1997::{
+    morris_system_block_pass, morris_system_product_pass, MorrisSystemBlockArgs, MorrisSystemProductArgs, MorrisViscosity,
+};
 use crate::viscosity::laplacian_morris1997::{shear_viscosity_pass, ShearViscosityArgs};
 use crate::viscosity::laplacian_muller2003::VelocityLaplacian;
 use crate::viscosity::stress_andrade2014::StressDivergence;
@@ -407,6 +409,54 @@ per_neighborhood_kernels!(system_block_f32, system_block_periodic_f32, SystemBlo
 per_neighborhood_kernels!(system_block_f64, system_block_periodic_f64, SystemBlockArgs<f64>, system_block_pass<f64>);
 per_neighborhood_kernels!(system_product_f32, system_product_periodic_f32, SystemProductArgs<f32>, system_product_pass<f32>);
 per_neighborhood_kernels!(system_product_f64, system_product_periodic_f64, SystemProductArgs<f64>, system_product_pass<f64>);
+per_neighborhood_kernels!(
+    system_block_morris_f32,
+    system_block_morris_periodic_f32,
+    MorrisSystemBlockArgs<f32, Newtonian<f32>>,
+    morris_system_block_pass<f32, Newtonian<f32>>
+);
+per_neighborhood_kernels!(
+    system_block_morris_f64,
+    system_block_morris_periodic_f64,
+    MorrisSystemBlockArgs<f64, Newtonian<f64>>,
+    morris_system_block_pass<f64, Newtonian<f64>>
+);
+per_neighborhood_kernels!(
+    system_block_morris_shear_f32,
+    system_block_morris_shear_periodic_f32,
+    MorrisSystemBlockArgs<f32, View<'static, f32>>,
+    morris_system_block_pass<f32, View<'static, f32>>
+);
+per_neighborhood_kernels!(
+    system_block_morris_shear_f64,
+    system_block_morris_shear_periodic_f64,
+    MorrisSystemBlockArgs<f64, View<'static, f64>>,
+    morris_system_block_pass<f64, View<'static, f64>>
+);
+per_neighborhood_kernels!(
+    system_product_morris_f32,
+    system_product_morris_periodic_f32,
+    MorrisSystemProductArgs<f32, Newtonian<f32>>,
+    morris_system_product_pass<f32, Newtonian<f32>>
+);
+per_neighborhood_kernels!(
+    system_product_morris_f64,
+    system_product_morris_periodic_f64,
+    MorrisSystemProductArgs<f64, Newtonian<f64>>,
+    morris_system_product_pass<f64, Newtonian<f64>>
+);
+per_neighborhood_kernels!(
+    system_product_morris_shear_f32,
+    system_product_morris_shear_periodic_f32,
+    MorrisSystemProductArgs<f32, View<'static, f32>>,
+    morris_system_product_pass<f32, View<'static, f32>>
+);
+per_neighborhood_kernels!(
+    system_product_morris_shear_f64,
+    system_product_morris_shear_periodic_f64,
+    MorrisSystemProductArgs<f64, View<'static, f64>>,
+    morris_system_product_pass<f64, View<'static, f64>>
+);
 per_index_kernel!(cg_start_f32, CgStartArgs<'static, f32>, cg_start_pass::<f32>);
 per_index_kernel!(cg_start_f64, CgStartArgs<'static, f64>, cg_start_pass::<f64>);
 per_index_kernel!(cg_step_f32, CgStepArgs<'static, f32>, cg_step_pass::<f32>);
@@ -605,6 +655,22 @@ pub const ENTRIES: &[(&str, Emulated)] = {
         system_product_periodic_f32,
         system_product_f64,
         system_product_periodic_f64,
+        system_block_morris_f32,
+        system_block_morris_periodic_f32,
+        system_block_morris_f64,
+        system_block_morris_periodic_f64,
+        system_block_morris_shear_f32,
+        system_block_morris_shear_periodic_f32,
+        system_block_morris_shear_f64,
+        system_block_morris_shear_periodic_f64,
+        system_product_morris_f32,
+        system_product_morris_periodic_f32,
+        system_product_morris_f64,
+        system_product_morris_periodic_f64,
+        system_product_morris_shear_f32,
+        system_product_morris_shear_periodic_f32,
+        system_product_morris_shear_f64,
+        system_product_morris_shear_periodic_f64,
         cg_start_f32,
         cg_start_f64,
         cg_step_f32,

@@ -15,9 +15,9 @@ use crate::fluid::Fluid;
 use crate::real::Real;
 use crate::smoothing::SmoothingKernels;
 use crate::topology::Open;
-use crate::vec3::Vec3;
+use crate::vec3::{SymTensor, Vec3};
 use crate::velocity_gradient::{rate_of_deformation, shear_rate, velocity_gradient};
-use crate::view::{Vec3View, View, ViewMut};
+use crate::view::{SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 
 /// Arguments of the viscosity pass.
 #[repr(C)]
@@ -119,4 +119,81 @@ impl<R: Real, Nu: ParticleViscosity<R>> ViscousOperator<R> for MorrisViscosity<'
 #[inline(always)]
 pub fn morris_pair_weight<R: Real>(half_viscosity_i: R, inverse_density_i: R, viscosity_j: R, inverse_density_j: R) -> R {
     half_viscosity_i * inverse_density_j + viscosity_j * R::from_f64(0.5) * inverse_density_i
+}
+
+/// Arguments of [`morris_system_block_pass`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct MorrisSystemBlockArgs<'a, R, Nu, N = Neighborhood<'a, Open>> {
+    pub neighborhood: N,
+    pub fluid: Fluid<R>,
+    /// Leap-frog's kick (s).
+    pub kick_dt: R,
+    pub id: View<'a, u32>,
+    pub density: View<'a, R>,
+    /// The solve's kinematic viscosity (m^2/s), lagged for a shear-thinning fluid.
+    pub viscosity: Nu,
+    /// The diagonal block of I - dt A out.
+    pub block: SymTensorViewMut<'a, R>,
+}
+
+/// The 3x3 diagonal block of I - dt A for Morris's operator, the implicit solve's
+/// preconditioner (`implicit_weiler2018`). A v_i = m sum_j w_ij F_ij (v_j - v_i) with the pair
+/// weight w and Laplacian weight F both symmetric and non-negative, so A is symmetric and
+/// negative semidefinite, and its block at i is -m sum_j w_ij F_ij times the identity (F is 0
+/// at j = i); a boundary particle's block is the identity.
+#[inline(always)]
+pub fn morris_system_block_pass<R: Real, Nu: ParticleViscosity<R>, N: Neighbors>(i: usize, a: &MorrisSystemBlockArgs<R, Nu, N>) {
+    let mut diagonal = R::ONE;
+    if !a.fluid.is_boundary(a.id.at(i)) && a.neighborhood.near_fluid(i) {
+        let half_viscosity_i = a.viscosity.at(i) * R::from_f64(0.5);
+        let inverse_density_i = R::ONE / a.density.at(i);
+        let mut sum = R::ZERO;
+        a.neighborhood.for_each_neighbor(i, a.fluid.kernels.h2, |j, _r_ij, r2| {
+            let weight = morris_pair_weight(half_viscosity_i, inverse_density_i, a.viscosity.at(j), R::ONE / a.density.at(j));
+            sum += weight * a.fluid.kernels.morris_laplacian(r2);
+        });
+        diagonal += a.kick_dt * a.fluid.mass * sum;
+    }
+    let block = SymTensor { xx: diagonal, yy: diagonal, zz: diagonal, xy: R::ZERO, xz: R::ZERO, yz: R::ZERO };
+    // SAFETY: invocation i owns entry i.
+    unsafe { a.block.write(i, block) };
+}
+
+/// Arguments of [`morris_system_product_pass`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct MorrisSystemProductArgs<'a, R, Nu, N = Neighborhood<'a, Open>> {
+    pub neighborhood: N,
+    pub fluid: Fluid<R>,
+    /// Leap-frog's kick (s).
+    pub kick_dt: R,
+    pub id: View<'a, u32>,
+    pub density: View<'a, R>,
+    /// The operator over the velocity field multiplied (m/s) and the solve's viscosity.
+    pub operator: MorrisViscosity<'a, R, Nu>,
+    /// (I - dt A) velocity out, zero at boundary particles (m/s).
+    pub product: Vec3ViewMut<'a, R>,
+}
+
+/// (I - dt A) v at fluid particle i, A v being Morris's operator ([`MorrisViscosity`]), one
+/// neighbor pass.
+#[inline(always)]
+pub fn morris_system_product_pass<R: Real, Nu: ParticleViscosity<R>, N: Neighbors>(
+    i: usize,
+    a: &MorrisSystemProductArgs<R, Nu, N>,
+) {
+    let product = if a.fluid.is_boundary(a.id.at(i)) {
+        Vec3::zero()
+    } else {
+        let own = a.operator.own(i, a.density.at(i));
+        let mut sum = Vec3::zero();
+        a.neighborhood.for_each_neighbor(i, a.fluid.kernels.h2, |j, r_ij, r2| {
+            // Morris's pair term reads F(r), not the kernel gradient.
+            sum += a.operator.pair(&own, j, a.density.at(j), r_ij, r2, Vec3::zero(), &a.fluid.kernels);
+        });
+        own.0 - sum * (a.fluid.mass * a.kick_dt)
+    };
+    // SAFETY: invocation i owns entry i.
+    unsafe { a.product.write(i, [product.x, product.y, product.z]) };
 }
