@@ -395,6 +395,13 @@ fn check_reports_counts_the_equation_10_bound_and_a_calibrated_estimate() {
     paper.material.sound_speed_m_s = 1.5f64.sqrt();
     let r = check(&paper, "round_jet.toml", None, std::time::Duration::ZERO).expect("valid");
     assert!(r.mach_bound > Some(1.9) && r.to_string().contains("warning            above Mach 1"), "{r}");
+    // Viscosity solved implicitly: sound bounds dt, 0.1 h / c = 0.1 * 0.008 / 20 = 4e-5 s.
+    let mut implicit = jet.clone();
+    implicit.material.viscosity.solver = coil::scene::ViscositySolver::Implicit;
+    implicit.material.viscosity.velocity_gradient = coil::scene::VelocityGradient::OwnDensity;
+    let r = check(&implicit, "round_jet.toml", None, std::time::Duration::ZERO).expect("valid");
+    assert!(r.limit == Limit::Acoustic && (r.dt_s - 4e-5).abs() < 1e-18, "{r}");
+    assert!(r.to_string().contains("viscous: none (solved implicitly)"), "{r}");
     // A channel driven along its periodic axis has no height to fall through.
     let channel = Scene::parse(
         "name = \"channel\"\n[material]\nparticle_spacing_m = 0.001\ngravity_m_s2 = [1e-3, 0.0, 0.0]\n\

@@ -81,12 +81,17 @@ impl fmt::Display for Report {
                 "warning            above Mach 1 falling fluid compresses far past its rest density and can pass through walls; raise material.sound_speed_m_s (Mach 0.1 or less for quantitative runs)"
             )?;
         }
+        // An implicit viscosity solve leaves the viscous term unbounded.
+        let viscous = if self.bound.viscous_s.is_finite() {
+            format!("viscous 0.1 h^2/(8 nu0) = {:.3e} s", self.bound.viscous_s)
+        } else {
+            "viscous: none (solved implicitly)".to_string()
+        };
         writeln!(
             f,
-            "Eq. (10) bound     {:.3e} s: acoustic 0.1 h/c = {:.3e} s, viscous 0.1 h^2/(8 nu0) = {:.3e} s",
+            "Eq. (10) bound     {:.3e} s: acoustic 0.1 h/c = {:.3e} s, {viscous}",
             self.bound.dt().0,
             self.bound.acoustic_s,
-            self.bound.viscous_s
         )?;
         writeln!(f, "dt                 {:.3e} s, limited by the {}", self.dt_s, self.limit)?;
         writeln!(f, "steps              {:.0}", self.steps)?;
