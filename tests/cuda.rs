@@ -474,16 +474,16 @@ fn implicit_viscosity_on_the_gpu_agrees_with_the_cpu() {
     paper.material.viscosity.solver = ViscositySolver::Implicit;
     paper.material.viscosity.velocity_gradient = coil::scene::VelocityGradient::OwnDensity;
     let operator = StressOperator(Newtonian { nu0: 0.001 });
-    agree(&paper, ImplicitModel { operator, tolerance, max_iterations }, "paper's operator");
+    agree(&paper, ImplicitModel { operator, tolerance, max_iterations, picard_iterations: 0 }, "paper's operator");
     let mut morris = small_jet();
     morris.material.viscosity.solver = ViscositySolver::Implicit;
     morris.material.viscosity.operator = ViscosityOperator::Morris;
     let operator = MorrisOperator(Newtonian { nu0: 0.001 });
-    agree(&morris, ImplicitModel { operator, tolerance, max_iterations }, "Morris");
+    agree(&morris, ImplicitModel { operator, tolerance, max_iterations, picard_iterations: 0 }, "Morris");
     morris.material.viscosity.cross_k_s = 1.0;
     morris.material.viscosity.nu_inf_m2_s = Some(1e-4);
     let operator = ShearThinningMorrisOperator(coil::simulation::model::cross_law::<f64>(&morris.material.viscosity));
-    agree(&morris, ImplicitModel { operator, tolerance, max_iterations }, "Morris, Cross");
+    agree(&morris, ImplicitModel { operator, tolerance, max_iterations, picard_iterations: 3 }, "Morris, Cross, Picard");
 }
 
 /// The jet with density from the continuity equation: its density is state that the sort

@@ -103,7 +103,12 @@ fn the_implicit_solve_holds_the_tube_fluid_at_the_jet_velocity() {
     );
     let scene = common::scene(&text);
     let initial = initial_particles(&scene, "jet.toml").expect("valid");
-    let model = ImplicitModel { operator: StressOperator(Newtonian { nu0: 0.01 }), tolerance: 1e-6, max_iterations: 1000 };
+    let model = ImplicitModel {
+        operator: StressOperator(Newtonian { nu0: 0.01 }),
+        tolerance: 1e-6,
+        max_iterations: 1000,
+        picard_iterations: 0,
+    };
     let mut sim = Simulation::<f64, _>::new(&scene, &initial, model);
     while sim.run.time < 0.05 {
         sim.step().expect("stable");

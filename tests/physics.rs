@@ -203,7 +203,7 @@ fn results_do_not_depend_on_the_thread_count_or_the_calling_thread() {
         common::set(&text, &["material.viscosity.solver=\"implicit\"", "material.viscosity.velocity_gradient=\"own_density\""]);
     same_results_on_any_thread_count(
         &implicit,
-        ImplicitModel { operator: StressOperator(cross), tolerance: 1e-3, max_iterations: 100 },
+        ImplicitModel { operator: StressOperator(cross), tolerance: 1e-3, max_iterations: 100, picard_iterations: 0 },
     );
 }
 

@@ -73,7 +73,6 @@ fn bad_scenes_exit_2_naming_file_and_field() {
         ),
         ("operator = \"stress\"", "operator = \"stress\"\nvelocity_gradient = \"bonet\"", "velocity_gradient"),
         ("operator = \"stress\"", "operator = \"stress\"\nsolver = \"implicit\"", "material.viscosity.solver"),
-        ("operator = \"stress\"", "operator = \"laplacian\"\nsolver = \"implicit\"", "material.viscosity.solver"),
         (
             "operator = \"stress\"",
             "operator = \"stress\"\nvelocity_gradient = \"own_density\"\nsolver = \"implicit\"\nimplicit = { tolerance = 2.0 }",
@@ -84,7 +83,19 @@ fn bad_scenes_exit_2_naming_file_and_field() {
             "operator = \"stress\"\nvelocity_gradient = \"own_density\"\nsolver = \"implicit\"\nimplicit = { max_iterations = 0 }",
             "material.viscosity.implicit.max_iterations",
         ),
+        (
+            "operator = \"stress\"",
+            "operator = \"stress\"\nvelocity_gradient = \"own_density\"\nsolver = \"implicit\"\nimplicit = { picard_iterations = 101 }",
+            "material.viscosity.implicit.picard_iterations",
+        ),
     ];
+    // Müller's Laplacian takes a Newtonian fluid only, which the scene above is not.
+    let laplacian = common::set(
+        &common::box_scene(0.02, [0.2; 3], [0.1; 3], ""),
+        &["material.viscosity.operator=\"laplacian\"", "material.viscosity.solver=\"implicit\""],
+    );
+    let error = Scene::parse(&laplacian, "laplacian.toml").expect_err("Müller's Laplacian is not solved implicitly");
+    assert!(error.to_string().contains("material.viscosity.solver"), "{error}");
     for (k, (from, to, field)) in cases.iter().enumerate() {
         assert!(good.contains(from), "{from}");
         let path = dir.join(format!("bad{k}.toml"));

@@ -281,6 +281,12 @@ pub struct ImplicitViscosity {
     /// stop the run with a diagnosis (frames kept), or go on and count it in the summary.
     #[serde(default)]
     pub on_no_convergence: NoConvergence,
+    /// How many times a step may read a shear-thinning fluid's viscosity again from the
+    /// solution and solve again (Picard iterations), while the solution misses the tolerance
+    /// at its own viscosity; 0 (the default) reads it once, from the solve's first guess.
+    /// Ignored for a Newtonian fluid.
+    #[serde(default)]
+    pub picard_iterations: u32,
 }
 
 /// What a step does with a solve that did not converge.
@@ -306,6 +312,7 @@ impl Default for ImplicitViscosity {
             tolerance: default_implicit_tolerance(),
             max_iterations: default_implicit_iterations(),
             on_no_convergence: NoConvergence::Stop,
+            picard_iterations: 0,
         }
     }
 }

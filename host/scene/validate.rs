@@ -11,6 +11,8 @@ use crate::simulation::time_step::{Limit, StabilityBound};
 /// Iterations an implicit solve may be allowed: a solve needing more at the chosen dt is
 /// better served by a smaller dt.
 const MAX_IMPLICIT_ITERATIONS: u32 = 10_000;
+/// The most Picard iterations a step may take.
+const MAX_PICARD_ITERATIONS: u32 = 100;
 use toml::Value;
 
 /// Rest densities a scene may give (kg/m^3): from a thin gas to past any liquid, so that the
@@ -245,6 +247,12 @@ impl Check<'_> {
                 return self.fail(
                     "material.viscosity.implicit.max_iterations",
                     format!("must be from 1 to {MAX_IMPLICIT_ITERATIONS}, got {}", v.implicit.max_iterations),
+                );
+            }
+            if v.implicit.picard_iterations > MAX_PICARD_ITERATIONS {
+                return self.fail(
+                    "material.viscosity.implicit.picard_iterations",
+                    format!("must be from 0 to {MAX_PICARD_ITERATIONS}, got {}", v.implicit.picard_iterations),
                 );
             }
         }

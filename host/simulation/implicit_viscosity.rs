@@ -55,6 +55,8 @@ pub struct ImplicitModel<Op> {
     /// Relative residual at which a solve stops.
     pub tolerance: f64,
     pub max_iterations: u32,
+    /// Times a step may read the viscosity again from the solution and solve again.
+    pub picard_iterations: u32,
 }
 
 impl<R: Real, Op: ImplicitOperator<R>> Model<R> for ImplicitModel<Op> {
@@ -330,33 +332,48 @@ impl<Op> ImplicitModel<Op> {
         start(backend);
         fix(backend, &[x.residual]);
         let [_, explicit] = dots(backend, r, r, r, r, x.partial_dots);
-        product(backend, x.solution.read());
-        start(backend);
-        fix(backend, &[x.residual, x.preconditioned, x.direction]);
-        let [mut rz, mut rr] = dots(backend, r, z, r, r, x.partial_dots);
         let target = self.tolerance * self.tolerance * explicit;
-        let mut iterations = 0;
-        while rr > target && iterations < self.max_iterations {
-            product(backend, p);
-            fix(backend, &[x.product]);
-            let [curvature, _] = dots(backend, p, ap, p, ap, x.partial_dots);
-            if !(curvature > 0.0) {
+        let (mut iterations, mut picard) = (0, 0);
+        let mut rr;
+        loop {
+            product(backend, x.solution.read());
+            start(backend);
+            fix(backend, &[x.residual, x.preconditioned, x.direction]);
+            let [mut rz, first] = dots(backend, r, z, r, r, x.partial_dots);
+            rr = first;
+            while rr > target && iterations < self.max_iterations {
+                product(backend, p);
+                fix(backend, &[x.product]);
+                let [curvature, _] = dots(backend, p, ap, p, ap, x.partial_dots);
+                if !(curvature > 0.0) {
+                    break;
+                }
+                backend.cg_step(CgStepArgs {
+                    alpha: R::from_f64(rz / curvature),
+                    direction: p,
+                    product: ap,
+                    block: x.block.read(),
+                    solution: x.solution,
+                    residual: x.residual,
+                    preconditioned: x.preconditioned,
+                });
+                let [rz_next, rr_next] = dots(backend, r, z, r, r, x.partial_dots);
+                iterations += 1;
+                backend.cg_direction(CgDirectionArgs {
+                    beta: R::from_f64(rz_next / rz),
+                    preconditioned: z,
+                    direction: x.direction,
+                });
+                rz = rz_next;
+                rr = rr_next;
+            }
+            // Picard: the viscosity read again from the solution, and solved again from it,
+            // until the solution meets the tolerance at its own viscosity.
+            if picard == self.picard_iterations || rr > target || (picard > 0 && first <= target) {
                 break;
             }
-            backend.cg_step(CgStepArgs {
-                alpha: R::from_f64(rz / curvature),
-                direction: p,
-                product: ap,
-                block: x.block.read(),
-                solution: x.solution,
-                residual: x.residual,
-                preconditioned: x.preconditioned,
-            });
-            let [rz_next, rr_next] = dots(backend, r, z, r, r, x.partial_dots);
-            iterations += 1;
-            backend.cg_direction(CgDirectionArgs { beta: R::from_f64(rz_next / rz), preconditioned: z, direction: x.direction });
-            rz = rz_next;
-            rr = rr_next;
+            picard += 1;
+            op.blocks(backend, &s, &step);
         }
         backend.viscous_acceleration(ViscousAccelerationArgs {
             fluid,

@@ -130,20 +130,11 @@ pub fn with_model<R: Real, W: WithModel>(scene: &Scene, work: W) -> W::Output {
     let nu0 = R::from_f64(v.nu0_m2_s);
     let hourglass = R::from_f64(v.hourglass_control);
     if v.solver == ViscositySolver::Implicit {
-        let (tolerance, max_iterations) = (v.implicit.tolerance, v.implicit.max_iterations);
         return match (v.operator, v.is_newtonian()) {
-            (ViscosityOperator::Morris, true) => {
-                work.with::<R, _>(ImplicitModel { operator: MorrisOperator(Newtonian { nu0 }), tolerance, max_iterations })
-            }
-            (ViscosityOperator::Morris, false) => work.with::<R, _>(ImplicitModel {
-                operator: ShearThinningMorrisOperator(cross_law(v)),
-                tolerance,
-                max_iterations,
-            }),
-            (_, true) => {
-                work.with::<R, _>(ImplicitModel { operator: StressOperator(Newtonian { nu0 }), tolerance, max_iterations })
-            }
-            (_, false) => work.with::<R, _>(ImplicitModel { operator: StressOperator(cross_law(v)), tolerance, max_iterations }),
+            (ViscosityOperator::Morris, true) => work.with::<R, _>(implicit(MorrisOperator(Newtonian { nu0 }), v)),
+            (ViscosityOperator::Morris, false) => work.with::<R, _>(implicit(ShearThinningMorrisOperator(cross_law(v)), v)),
+            (_, true) => work.with::<R, _>(implicit(StressOperator(Newtonian { nu0 }), v)),
+            (_, false) => work.with::<R, _>(implicit(StressOperator(cross_law(v)), v)),
         };
     }
     match (v.operator, v.is_newtonian()) {
@@ -166,6 +157,17 @@ pub fn with_model<R: Real, W: WithModel>(scene: &Scene, work: W) -> W::Output {
             VelocityGradient::Renormalized => work.with::<R, _>(StressModel(cross_law(v), Renormalized)),
             VelocityGradient::OwnDensity => work.with::<R, _>(StressModel(cross_law(v), OwnDensity)),
         },
+    }
+}
+
+/// Viscosity `v` solved implicitly with `operator`, as the scene sets the solve.
+fn implicit<Op>(operator: Op, v: &Viscosity) -> ImplicitModel<Op> {
+    ImplicitModel {
+        operator,
+        tolerance: v.implicit.tolerance,
+        max_iterations: v.implicit.max_iterations,
+        // A Newtonian fluid's viscosity does not depend on the flow: nothing to read again.
+        picard_iterations: if v.is_newtonian() { 0 } else { v.implicit.picard_iterations },
     }
 }
 
