@@ -1,5 +1,6 @@
 //! Morris, Fox and Zhu 1997's viscous operator, with a constant viscosity or, through the
-//! shear-viscosity pre-pass, a per-particle one.
+//! shear-viscosity pre-pass, a per-particle one; and the same operator as the matrix of the
+//! implicit viscosity solve (`implicit_weiler2018`): its products and diagonal blocks.
 //!
 //! The pre-pass: per-particle viscosity for Morris's operator with a shear-thinning fluid: nu_i = nu(D_i),
 //! Eq. (3), at the shear rate D_i of Eq. (2) from the velocity gradient of Eq. (8).
