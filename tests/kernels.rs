@@ -1157,6 +1157,40 @@ fn scrambled_velocity(n: usize) -> [Vec<f64>; 3] {
     std::array::from_fn(|_| (0..n).map(|_| 2.0 * next()).collect())
 }
 
+/// How far the implicit system's preconditioner blocks `block` and product `product` (of
+/// `v`, m/s by axis) stray from I - dt A for the whole matrix `a` of the operator: the largest
+/// block entry error, the largest product error (m/s), and dt times the largest row sum, the
+/// scale both are judged against.
+fn system_errors(
+    a: &[f64],
+    dt: f64,
+    block: coil_kernels::view::SymTensorView<f64>,
+    product: Vec3View<f64>,
+    v: &[Vec<f64>; 3],
+) -> (f64, f64, f64) {
+    let (n, dof) = (v[0].len(), 3 * v[0].len());
+    let scale = (0..dof).map(|r| (0..dof).map(|c| a[r * dof + c].abs()).sum::<f64>()).fold(0.0, f64::max) * dt;
+    let b = block;
+    let mut block_error = 0.0f64;
+    for i in 0..n {
+        let got =
+            [[b.xx.at(i), b.xy.at(i), b.xz.at(i)], [b.xy.at(i), b.yy.at(i), b.yz.at(i)], [b.xz.at(i), b.yz.at(i), b.zz.at(i)]];
+        for r in 0..3 {
+            for c in 0..3 {
+                let want = if r == c { 1.0 } else { 0.0 } - dt * a[(3 * i + r) * dof + 3 * i + c];
+                block_error = block_error.max((got[r][c] - want).abs());
+            }
+        }
+    }
+    let mut product_error = 0.0f64;
+    for row in 0..dof {
+        let av: f64 = (0..dof).map(|c| a[row * dof + c] * v[c % 3][c / 3]).sum();
+        let want = v[row % 3][row / 3] - dt * av;
+        product_error = product_error.max((product.at(row / 3)[row % 3] - want).abs());
+    }
+    (block_error, product_error, scale)
+}
+
 /// The implicit solve's system, I - dt A, is the paper's operator with the own-density gradient:
 /// its product agrees with the whole matrix of that operator, and the preconditioner's 3x3
 /// blocks are that matrix's diagonal blocks.
@@ -1166,7 +1200,7 @@ fn the_implicit_system_is_the_papers_operator_and_its_preconditioner_its_diagona
     use coil_kernels::viscosity::implicit_weiler2018::{
         implicit_stress_pass, system_block_pass, system_product_pass, ImplicitStressArgs, SystemBlockArgs, SystemProductArgs,
     };
-    let (dof, [a]) = free_surface_matrices(|ball, v| [ball.paper_accelerations(v, OwnDensity)]);
+    let (_, [a]) = free_surface_matrices(|ball, v| [ball.paper_accelerations(v, OwnDensity)]);
     let mut ball = Ball::new();
     let dt = 10.0 * ball.viscous_bound();
     let (fluid, p) = (ball.fluid, &mut ball.particles);
@@ -1180,19 +1214,6 @@ fn the_implicit_system_is_the_papers_operator_and_its_preconditioner_its_diagona
     let x = arrays.views(n);
     let block = SystemBlockArgs { neighborhood: nb, fluid, kick_dt: dt, id, density, viscosity, block: x.block };
     (0..n).for_each(|i| system_block_pass(i, &block));
-    let b = x.block.read();
-    let scale = (0..dof).map(|r| (0..dof).map(|c| a[r * dof + c].abs()).sum::<f64>()).fold(0.0, f64::max) * dt;
-    let mut block_error = 0.0f64;
-    for i in 0..n {
-        let got =
-            [[b.xx.at(i), b.xy.at(i), b.xz.at(i)], [b.xy.at(i), b.yy.at(i), b.yz.at(i)], [b.xz.at(i), b.yz.at(i), b.zz.at(i)]];
-        for r in 0..3 {
-            for c in 0..3 {
-                let want = if r == c { 1.0 } else { 0.0 } - dt * a[(3 * i + r) * dof + 3 * i + c];
-                block_error = block_error.max((got[r][c] - want).abs());
-            }
-        }
-    }
     let v = scrambled_velocity(n);
     let stress = stress_view_mut(p.stress.as_mut().expect("allocated"), n);
     let velocity = vec3_view(&v, n);
@@ -1209,12 +1230,7 @@ fn the_implicit_system_is_the_papers_operator_and_its_preconditioner_its_diagona
         product: x.product,
     };
     (0..n).for_each(|i| system_product_pass(i, &product));
-    let mut product_error = 0.0f64;
-    for row in 0..dof {
-        let av: f64 = (0..dof).map(|c| a[row * dof + c] * v[c % 3][c / 3]).sum();
-        let want = v[row % 3][row / 3] - dt * av;
-        product_error = product_error.max((x.product.at(row / 3)[row % 3] - want).abs());
-    }
+    let (block_error, product_error, scale) = system_errors(&a, dt, x.block.read(), x.product.read(), &v);
     eprintln!("dt {dt:.2e} s, dt times the largest row sum {scale:.2e}: block error {block_error:.2e}, product error {product_error:.2e} m/s");
     assert!(block_error < 1e-12 * scale, "the preconditioner's blocks differ from the operator's by {block_error}");
     assert!(product_error < 1e-12 * scale, "(I - dt A) v differs from the operator's matrix by {product_error} m/s");
@@ -1229,7 +1245,7 @@ fn the_implicit_morris_system_is_morris_matrix_and_its_preconditioner_its_diagon
     use coil_kernels::viscosity::laplacian_morris1997::{
         morris_system_block_pass, morris_system_product_pass, MorrisSystemBlockArgs, MorrisSystemProductArgs, MorrisViscosity,
     };
-    let (dof, [_, _, _, a]) = free_surface_viscous_matrices();
+    let (_, [_, _, _, a]) = free_surface_viscous_matrices();
     let mut ball = Ball::new();
     let dt = 10.0 * ball.viscous_bound();
     let (fluid, p) = (ball.fluid, &mut ball.particles);
@@ -1243,7 +1259,6 @@ fn the_implicit_morris_system_is_morris_matrix_and_its_preconditioner_its_diagon
     let x = arrays.views(n);
     let v = scrambled_velocity(n);
     let velocity = vec3_view(&v, n);
-    let scale = (0..dof).map(|r| (0..dof).map(|c| a[r * dof + c].abs()).sum::<f64>()).fold(0.0, f64::max) * dt;
     // The same passes for either viscosity type.
     macro_rules! errors {
         ($viscosity:expr) => {{
@@ -1267,31 +1282,10 @@ fn the_implicit_morris_system_is_morris_matrix_and_its_preconditioner_its_diagon
             };
             (0..n).for_each(|i| morris_system_block_pass(i, &block));
             (0..n).for_each(|i| morris_system_product_pass(i, &product));
-            let b = x.block.read();
-            let mut block_error = 0.0f64;
-            for i in 0..n {
-                let got = [
-                    [b.xx.at(i), b.xy.at(i), b.xz.at(i)],
-                    [b.xy.at(i), b.yy.at(i), b.yz.at(i)],
-                    [b.xz.at(i), b.yz.at(i), b.zz.at(i)],
-                ];
-                for r in 0..3 {
-                    for c in 0..3 {
-                        let want = if r == c { 1.0 } else { 0.0 } - dt * a[(3 * i + r) * dof + 3 * i + c];
-                        block_error = block_error.max((got[r][c] - want).abs());
-                    }
-                }
-            }
-            let mut product_error = 0.0f64;
-            for row in 0..dof {
-                let av: f64 = (0..dof).map(|c| a[row * dof + c] * v[c % 3][c / 3]).sum();
-                let want = v[row % 3][row / 3] - dt * av;
-                product_error = product_error.max((x.product.at(row / 3)[row % 3] - want).abs());
-            }
-            (block_error, product_error)
+            system_errors(&a, dt, x.block.read(), x.product.read(), &v)
         }};
     }
-    for (what, (block_error, product_error)) in
+    for (what, (block_error, product_error, scale)) in
         [("constant", errors!(Newtonian { nu0: 0.1 })), ("per particle", errors!(per_particle))]
     {
         eprintln!("{what} viscosity, dt times the largest row sum {scale:.2e}: block error {block_error:.2e}, product error {product_error:.2e} m/s");
