@@ -1170,11 +1170,10 @@ fn system_errors(
 ) -> (f64, f64, f64) {
     let (n, dof) = (v[0].len(), 3 * v[0].len());
     let scale = (0..dof).map(|r| (0..dof).map(|c| a[r * dof + c].abs()).sum::<f64>()).fold(0.0, f64::max) * dt;
-    let b = block;
     let mut block_error = 0.0f64;
     for i in 0..n {
-        let got =
-            [[b.xx.at(i), b.xy.at(i), b.xz.at(i)], [b.xy.at(i), b.yy.at(i), b.yz.at(i)], [b.xz.at(i), b.yz.at(i), b.zz.at(i)]];
+        let b = block.at(i);
+        let got = [[b.xx, b.xy, b.xz], [b.xy, b.yy, b.yz], [b.xz, b.yz, b.zz]];
         for r in 0..3 {
             for c in 0..3 {
                 let want = if r == c { 1.0 } else { 0.0 } - dt * a[(3 * i + r) * dof + 3 * i + c];
