@@ -16,6 +16,10 @@ use coil_kernels::cell_grid::Neighbors;
 use coil_kernels::continuity_molteni2009::{continuity_pass, density_integration_pass, ContinuityArgs, DensityIntegrationArgs};
 use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::density::{density_pass, DensityArgs, DensityKernel};
+use coil_kernels::dfsph_bender2017::{
+    density_error_pass, divergence_error_pass, error_sum_pass, factor_pass, pressure_change_pass, warm_start_pass,
+    DensityErrorArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, WarmStartArgs, ERROR_RANGE,
+};
 use coil_kernels::diagnostics::{range_figures, DiagnosticsArgs};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::{leapfrog_pass, LeapfrogArgs};
@@ -97,6 +101,7 @@ impl<R: Real> CpuBackend<R> {
             velocity_gradient: p.velocity_gradient.as_mut().map(|g| mat3_view_mut(g, n)),
             wall_mirror,
             implicit: p.implicit.as_mut().map(|a| a.views(n)),
+            pressure_solve: p.pressure_solve.as_mut().map(|a| a.views(n)),
         };
         schedule.run(views, &mut CpuPasses { n });
     }
@@ -270,6 +275,27 @@ impl<R: Real, T: Topology, N: Neighbors + Sync> Passes<R, T, N> for CpuPasses {
         let n = self.n;
         let ranges = n.div_ceil(DOT_RANGE);
         (0..ranges).into_par_iter().for_each(|r| dot_pass(r, n, &args, partial));
+        sum_in_order(&partial.read(), ranges)
+    }
+    fn dfsph_factor(&mut self, args: FactorArgs<'_, R, N>) {
+        launch(self.n, |i| factor_pass(i, &args));
+    }
+    fn divergence_error(&mut self, args: DivergenceErrorArgs<'_, R, N>) {
+        launch(self.n, |i| divergence_error_pass(i, &args));
+    }
+    fn density_error(&mut self, args: DensityErrorArgs<'_, R, N>) {
+        launch(self.n, |i| density_error_pass(i, &args));
+    }
+    fn pressure_change(&mut self, args: PressureChangeArgs<'_, R, N>) {
+        launch(self.n, |i| pressure_change_pass(i, &args));
+    }
+    fn warm_start(&mut self, args: WarmStartArgs<'_, R>) {
+        launch(self.n, |i| warm_start_pass(i, &args));
+    }
+    fn error_sums(&mut self, args: ErrorSumArgs<'_, R>, partial: ViewMut<'_, [f64; 2]>) -> [f64; 2] {
+        let n = self.n;
+        let ranges = n.div_ceil(ERROR_RANGE);
+        (0..ranges).into_par_iter().for_each(|r| error_sum_pass(r, n, &args, partial));
         sum_in_order(&partial.read(), ranges)
     }
 }

@@ -257,5 +257,10 @@ fn reorder<R: Real>(p: &mut Particles<R>, order: View<u32>, live: usize) {
             permute(&mut implicit.viscous_change[a], &mut p.scratch_real, order, live);
         }
     }
+    if let Some(pressure) = &mut p.pressure_solve {
+        for sum in &mut pressure.stiffness_sums {
+            permute(sum, &mut p.scratch_real, order, live);
+        }
+    }
     p.set_len(live);
 }

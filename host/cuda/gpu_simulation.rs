@@ -11,7 +11,7 @@ use super::device_array::{vec3_view, vec3_view_mut, vec3_zeros, DeviceArray, Dev
 use super::gpu::{ByValue, CudaError, Gpu};
 use super::scan::scan_chunk_totals;
 use crate::cpu::sum_in_order;
-use crate::simulation::backend::{Backend, ImplicitViews, ParticleViews, Passes, Readout, Schedule};
+use crate::simulation::backend::{Backend, ImplicitViews, ParticleViews, Passes, PressureViews, Readout, Schedule};
 use crate::simulation::model::Model;
 use crate::simulation::particles::{HostParticles, ModelFields, Particles};
 use crate::simulation::{Setup, Simulation, StepError};
@@ -21,6 +21,9 @@ use coil_kernels::continuity_molteni2009::{ContinuityArgs, DensityIntegrationArg
 use coil_kernels::counting_sort::scan_levels_len;
 use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::density::{DensityArgs, DensityKernel};
+use coil_kernels::dfsph_bender2017::{
+    DensityErrorArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, WarmStartArgs, ERROR_RANGE,
+};
 use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::fluid_cells::{HoldsFluidArgs, NearFluidArgs};
@@ -101,6 +104,45 @@ struct DeviceState<R> {
     wall_mirror: Option<DeviceVec3<f64>>,
     /// The implicit viscosity solve's arrays, where viscosity is solved implicitly.
     implicit: Option<DeviceImplicit<R>>,
+    /// The pressure solves' arrays, where pressure is solved for a divergence-free flow.
+    pressure_solve: Option<DevicePressure<R>>,
+}
+
+/// The divergence-free pressure solves' arrays on the device (`particles::PressureArrays`).
+struct DevicePressure<R> {
+    /// factor, stiffness, error.
+    scratch: [DeviceArray<R>; 3],
+    /// The divergence and density solves' stiffness sums: state, which the sort gathers.
+    stiffness_sums: [DeviceArray<R>; 2],
+    partial_sums: DeviceArray<[f64; 2]>,
+}
+
+impl<R: Real> DevicePressure<R> {
+    fn new(gpu: &Gpu, capacity: usize) -> Result<Self, CudaError> {
+        let a = || DeviceArray::zeros(gpu, capacity, "pressure solve arrays");
+        Ok(Self {
+            scratch: [a()?, a()?, a()?],
+            stiffness_sums: [a()?, a()?],
+            partial_sums: DeviceArray::zeros(gpu, capacity.div_ceil(ERROR_RANGE), "partial error sums")?,
+        })
+    }
+
+    fn bytes(&self) -> usize {
+        self.scratch.iter().chain(&self.stiffness_sums).map(DeviceArray::bytes).sum::<usize>() + self.partial_sums.bytes()
+    }
+
+    fn views(&self, n: usize) -> PressureViews<'static, R> {
+        let [factor, stiffness, error] = &self.scratch;
+        let [divergence_sum, density_sum] = &self.stiffness_sums;
+        PressureViews {
+            factor: factor.view_mut(n),
+            stiffness: stiffness.view_mut(n),
+            error: error.view_mut(n),
+            divergence_sum: divergence_sum.view_mut(n),
+            density_sum: density_sum.view_mut(n),
+            partial_sums: self.partial_sums.view_mut(n.div_ceil(ERROR_RANGE)),
+        }
+    }
 }
 
 /// The implicit viscosity solve's arrays on the device (`particles::ImplicitArrays`).
@@ -211,10 +253,15 @@ impl<R: Real> DeviceState<R> {
             staged_velocity: vec3_zeros(gpu, staged, "inlet layers")?,
             staged_id: DeviceArray::zeros(gpu, staged, "inlet layers")?,
             staged_density: if fields.density_rate { Some(DeviceArray::zeros(gpu, staged, "inlet layers")?) } else { None },
-            staged_zeros: if fields.implicit { Some(DeviceArray::zeros(gpu, staged, "inlet layers")?) } else { None },
+            staged_zeros: if fields.implicit || fields.pressure_solve {
+                Some(DeviceArray::zeros(gpu, staged, "inlet layers")?)
+            } else {
+                None
+            },
             figures: DeviceArray::zeros(gpu, capacity.div_ceil(DIAGNOSTICS_RANGE), "diagnostics")?,
             wall_mirror: None,
             implicit: if fields.implicit { Some(DeviceImplicit::new(gpu, capacity)?) } else { None },
+            pressure_solve: if fields.pressure_solve { Some(DevicePressure::new(gpu, capacity)?) } else { None },
         })
     }
 
@@ -251,6 +298,7 @@ impl<R: Real> DeviceState<R> {
             + self.figures.bytes()
             + self.wall_mirror.as_ref().map_or(0, v3)
             + self.implicit.as_ref().map_or(0, DeviceImplicit::bytes)
+            + self.pressure_solve.as_ref().map_or(0, DevicePressure::bytes)
     }
 
     fn stress_view(&self, n: usize) -> Option<SymTensorViewMut<'static, R>> {
@@ -293,11 +341,12 @@ struct GpuPasses<'g> {
     count: View<'static, u32>,
     threads: u32,
     result: Result<(), CudaError>,
-    partial_dots: Option<PartialDots<'g>>,
+    partial_dots: Option<PartialSums<'g>>,
+    partial_sums: Option<PartialSums<'g>>,
 }
 
-/// The implicit solve's partial dot products on the device, and their host copy.
-type PartialDots<'g> = (&'g DeviceArray<[f64; 2]>, &'g mut [[f64; 2]]);
+/// A reduction's partial sums on the device, and their host copy.
+type PartialSums<'g> = (&'g DeviceArray<[f64; 2]>, &'g mut [[f64; 2]]);
 
 impl GpuPasses<'_> {
     fn run<A: Copy>(&mut self, name: &'static str, args: A) {
@@ -389,25 +438,60 @@ impl<R: Real, T: Topology> Passes<R, T, Neighborhood<'static, T>> for GpuPasses<
     }
     /// Waits for the device: the solve's next step depends on the sums.
     fn dots(&mut self, args: DotArgs<'_, R>, partial: ViewMut<'_, [f64; 2]>) -> [f64; 2] {
+        self.reduce(kernel::<R>("dots", "", ""), args, partial, Reduction::Dots)
+    }
+    fn dfsph_factor(&mut self, args: FactorArgs<'_, R, Neighborhood<'static, T>>) {
+        self.run(kernel::<R>("dfsph_factor", "", T::NAME), args);
+    }
+    fn divergence_error(&mut self, args: DivergenceErrorArgs<'_, R, Neighborhood<'static, T>>) {
+        self.run(kernel::<R>("divergence_error", "", T::NAME), args);
+    }
+    fn density_error(&mut self, args: DensityErrorArgs<'_, R, Neighborhood<'static, T>>) {
+        self.run(kernel::<R>("density_error", "", T::NAME), args);
+    }
+    fn pressure_change(&mut self, args: PressureChangeArgs<'_, R, Neighborhood<'static, T>>) {
+        self.run(kernel::<R>("pressure_change", "", T::NAME), args);
+    }
+    fn warm_start(&mut self, args: WarmStartArgs<'_, R>) {
+        self.run(kernel::<R>("warm_start", "", ""), args);
+    }
+    /// Waits for the device: the solve's next sweep depends on the sums.
+    fn error_sums(&mut self, args: ErrorSumArgs<'_, R>, partial: ViewMut<'_, [f64; 2]>) -> [f64; 2] {
+        self.reduce(kernel::<R>("error_sums", "", ""), args, partial, Reduction::ErrorSums)
+    }
+}
+
+/// Which partial sums a reduction fills.
+enum Reduction {
+    /// The implicit viscosity solve's dot products.
+    Dots,
+    /// The pressure solves' error sums.
+    ErrorSums,
+}
+
+impl<'g> GpuPasses<'g> {
+    /// Runs the reduction `name` over `args` into `partial` (one pair per range), then adds
+    /// the ranges' parts on the host in range order; NaN where the device failed.
+    fn reduce<A: Copy>(&mut self, name: &'static str, args: A, partial: ViewMut<'_, [f64; 2]>, reduction: Reduction) -> [f64; 2] {
         let ranges = partial.len();
         if self.result.is_ok() {
-            // SAFETY: dots_<R>(count, args, out), `out` holding one pair per range.
-            self.result = unsafe {
-                self.gpu.launch(
-                    kernel::<R>("dots", "", ""),
-                    ranges as u32,
-                    &[&ByValue(self.count), &ByValue(args), &ByValue(partial)],
-                )
-            };
+            // SAFETY: name(count, args, out), `out` holding one pair per range.
+            self.result =
+                unsafe { self.gpu.launch(name, ranges as u32, &[&ByValue(self.count), &ByValue(args), &ByValue(partial)]) };
         }
-        let (device, host) = self.partial_dots.as_mut().expect("the implicit solve allocates its partial dot products");
-        if self.result.is_ok() {
-            self.result = device.download(self.gpu, &mut host[..ranges]);
-        }
-        match self.result {
+        let sums = match reduction {
+            Reduction::Dots => &mut self.partial_dots,
+            Reduction::ErrorSums => &mut self.partial_sums,
+        };
+        let (device, host) = sums.as_mut().expect("a solve allocates its partial sums");
+        let result = std::mem::replace(&mut self.result, Ok(()));
+        let result = result.and_then(|()| device.download(self.gpu, &mut host[..ranges]));
+        let total = match &result {
             Ok(()) => sum_in_order(&View::new(&host[..ranges]), ranges),
             Err(_) => [f64::NAN; 2],
-        }
+        };
+        self.result = result;
+        total
     }
 }
 
@@ -452,6 +536,8 @@ pub struct CudaBackend<R: Real> {
     figures: Vec<StateFigures>,
     /// The host's copy of the implicit solve's partial dot products.
     partial_dots: Vec<[f64; 2]>,
+    /// The host's copy of the pressure solves' partial error sums.
+    partial_sums: Vec<[f64; 2]>,
 }
 
 impl<R: Real> CudaBackend<R> {
@@ -480,6 +566,7 @@ impl<R: Real> CudaBackend<R> {
             staged: Particles::with_capacity(staged, ModelFields::default()),
             figures: vec![StateFigures::default(); device.figures.len()],
             partial_dots: vec![[0.0; 2]; device.implicit.as_ref().map_or(0, |i| i.partial_dots.len())],
+            partial_sums: vec![[0.0; 2]; device.pressure_solve.as_ref().map_or(0, |p| p.partial_sums.len())],
             mirror: host,
             gpu,
             device,
@@ -514,6 +601,11 @@ impl<R: Real> CudaBackend<R> {
         if let (Some(device), Some(host)) = (&mut d.implicit, &p.implicit) {
             for a in 0..3 {
                 device.viscous_change[a].upload(gpu, &host.viscous_change[a][..n])?;
+            }
+        }
+        if let (Some(device), Some(host)) = (&mut d.pressure_solve, &p.pressure_solve) {
+            for (device, host) in device.stiffness_sums.iter_mut().zip(&host.stiffness_sums) {
+                device.upload(gpu, &host[..n])?;
             }
         }
         d.cell_start.upload(gpu, self.mirror.grid.cell_start_mut())?;
@@ -605,8 +697,10 @@ impl<R: Real> CudaBackend<R> {
                 )?;
                 std::mem::swap(&mut d.density, &mut d.scratch_real);
             }
-            if let Some(implicit) = &mut d.implicit {
-                for field in &mut implicit.viscous_change {
+            let pressure_sums = d.pressure_solve.as_mut().map(|p| &mut p.stiffness_sums[..]).unwrap_or_default();
+            let viscous_change = d.implicit.as_mut().map(|i| &mut i.viscous_change[..]).unwrap_or_default();
+            {
+                for field in viscous_change.iter_mut().chain(pressure_sums) {
                     let sorted = ByValue(d.scratch_real.view_mut(n));
                     gpu.launch(
                         kernel::<R>("gather", "", ""),
@@ -703,9 +797,12 @@ impl<R: Real> Backend<R> for CudaBackend<R> {
                 let target = ByValue(d.density.view_mut(capacity));
                 gpu.launch(kernel::<R>("append", "", ""), added as u32, &[&count, &k, &ByValue(staged.view(added)), &target])?;
             }
-            // New particles start the implicit solve from v* alone.
-            if let (Some(implicit), Some(zeros)) = (&d.implicit, &d.staged_zeros) {
-                for target in &implicit.viscous_change {
+            // New particles start the implicit solve from v* alone, and the pressure solves
+            // from no stiffness.
+            if let Some(zeros) = &d.staged_zeros {
+                let viscous_change = d.implicit.as_ref().map(|i| &i.viscous_change[..]).unwrap_or_default();
+                let pressure_sums = d.pressure_solve.as_ref().map(|p| &p.stiffness_sums[..]).unwrap_or_default();
+                for target in viscous_change.iter().chain(pressure_sums) {
                     gpu.launch(
                         kernel::<R>("append", "", ""),
                         added as u32,
@@ -753,10 +850,18 @@ impl<R: Real> Backend<R> for CudaBackend<R> {
                 .map(|g| Mat3ViewMut { rows: [vec3_view_mut(&g[0], n), vec3_view_mut(&g[1], n), vec3_view_mut(&g[2], n)] }),
             wall_mirror: d.wall_mirror.as_ref().map(|m| vec3_view(m, m[0].len())),
             implicit: d.implicit.as_ref().map(|i| i.views(n)),
+            pressure_solve: d.pressure_solve.as_ref().map(|p| p.views(n)),
         };
         let partial_dots = d.implicit.as_ref().map(|i| (&i.partial_dots, &mut self.partial_dots[..]));
-        let mut passes =
-            GpuPasses { gpu: &mut self.gpu, count: d.count.view(1), threads: n as u32, result: Ok(()), partial_dots };
+        let partial_sums = d.pressure_solve.as_ref().map(|p| (&p.partial_sums, &mut self.partial_sums[..]));
+        let mut passes = GpuPasses {
+            gpu: &mut self.gpu,
+            count: d.count.view(1),
+            threads: n as u32,
+            result: Ok(()),
+            partial_dots,
+            partial_sums,
+        };
         schedule.run(views, &mut passes);
         passes.result
     }
@@ -812,6 +917,11 @@ impl<R: Real> Backend<R> for CudaBackend<R> {
         if let (Some(device), Some(host)) = (&d.implicit, &mut p.implicit) {
             for a in 0..3 {
                 device.viscous_change[a].download(gpu, &mut host.viscous_change[a][..n])?;
+            }
+        }
+        if let (Some(device), Some(host)) = (&d.pressure_solve, &mut p.pressure_solve) {
+            for (device, host) in device.stiffness_sums.iter().zip(&mut host.stiffness_sums) {
+                device.download(gpu, &mut host[..n])?;
             }
         }
         d.cell_start.download(gpu, self.mirror.grid.cell_start_mut())?;

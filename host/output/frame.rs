@@ -65,7 +65,12 @@ impl Frame {
             self.position.push([0, 1, 2].map(|a| p.position[a][i]));
             self.velocity.push([0, 1, 2].map(|a| p.velocity[a][i].to_f64() as f32));
             self.density.push(rho.to_f64() as f32);
-            self.pressure.push(pressure(rho, &fluid).to_f64() as f32);
+            // A solved pressure is the density solve's last: rho^2 times its stiffness.
+            let p_i = match &p.pressure_solve {
+                Some(solve) => rho * rho * solve.stiffness_sums[1][i],
+                None => pressure(rho, &fluid),
+            };
+            self.pressure.push(p_i.to_f64() as f32);
             self.viscosity.push(run.model.law().viscosity(R::from_f64(d as f64)).to_f64() as f32);
             self.shear_rate.push(d);
             self.id.push(p.id[i]);

@@ -26,8 +26,9 @@ use std::path::Path;
 const MAGIC: &[u8; 8] = b"COILCKPT";
 /// 2: the fingerprint hashes the [`PHYSICS`] fields only. 3: the frame files' sizes and
 /// digests. 4: a flag after the densities, then the implicit solve's viscous change where it
-/// is set (a version 3 checkpoint, which has neither, is read as unset).
-const FORMAT_VERSION: u32 = 4;
+/// is set (a version 3 checkpoint, which has neither, is read as unset). 5: then a flag and
+/// the pressure solves' stiffness sums where pressure is solved.
+const FORMAT_VERSION: u32 = 5;
 
 /// FNV-1a, 64 bits: the same value on every machine and Rust version, unlike std's hasher.
 pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
@@ -37,7 +38,8 @@ pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
 /// Fields of a scene that a resumed run may change ([`RESUMABLE`] as `--set` spells them): how
 /// far it runs, how it picks dt and how far it solves implicit viscosity (to get past an
 /// instability or an unconverged solve from the last good frame), and what it writes.
-pub const RESUMABLE: [&str; 4] = ["simulation.end_time_s", "simulation.time_step", "material.viscosity.implicit", "output"];
+pub const RESUMABLE: [&str; 5] =
+    ["simulation.end_time_s", "simulation.time_step", "simulation.divergence_free", "material.viscosity.implicit", "output"];
 
 /// The fields that fix what a step computes, as `--set` spells them: a checkpoint resumes only a
 /// scene that agrees with the one it was taken from on each (array sections as a whole). A field
@@ -99,11 +101,13 @@ fn limit_code(limit: Limit) -> u8 {
         Limit::Viscous => 1,
         Limit::Velocity => 2,
         Limit::Fixed => 3,
+        Limit::Cfl => 4,
+        Limit::Largest => 5,
     }
 }
 
 fn limit_from(code: u8) -> Option<Limit> {
-    [Limit::Acoustic, Limit::Viscous, Limit::Velocity, Limit::Fixed].get(usize::from(code)).copied()
+    [Limit::Acoustic, Limit::Viscous, Limit::Velocity, Limit::Fixed, Limit::Cfl, Limit::Largest].get(usize::from(code)).copied()
 }
 
 /// Appends fields to a checkpoint's bytes.
@@ -207,6 +211,10 @@ pub struct Checkpoint {
     particle_data: usize,
     /// Whether the implicit solve's viscous change follows the densities.
     viscous_change: bool,
+    /// Whether the pressure solves' stiffness sums follow.
+    stiffness_sums: bool,
+    /// The format version the checkpoint was written in.
+    version: u32,
     bytes: Vec<u8>,
 }
 
@@ -271,6 +279,12 @@ pub fn encode<R: Real, M: Model<R>>(sim: &RunState<R, M>, p: &Particles<R>, scen
     if let Some(implicit) = &p.implicit {
         for a in 0..3 {
             w.reals(&implicit.viscous_change[a][..n]);
+        }
+    }
+    w.u8(u8::from(p.pressure_solve.is_some()));
+    if let Some(pressure) = &p.pressure_solve {
+        for sum in &pressure.stiffness_sums {
+            w.reals(&sum[..n]);
         }
     }
     let sum = fnv1a(&w.0);
@@ -363,6 +377,10 @@ impl Checkpoint {
         if viscous_change {
             r.take(particles * 3 * real_bytes, "the implicit solve's viscous change")?;
         }
+        let stiffness_sums = version >= 5 && r.u8("the pressure solves' flag")? == 1;
+        if stiffness_sums {
+            r.take(particles * 2 * real_bytes, "the pressure solves' stiffness sums")?;
+        }
         if r.at != body.len() {
             return Err(format!("has {} bytes past its particles", body.len() - r.at));
         }
@@ -385,6 +403,8 @@ impl Checkpoint {
             particles,
             particle_data,
             viscous_change,
+            stiffness_sums,
+            version,
             bytes,
         })
     }
@@ -442,9 +462,11 @@ impl Checkpoint {
         for (d, b) in p.density[..n].iter_mut().zip(next(rb * n).chunks_exact(rb)) {
             *d = real(b);
         }
+        if self.version >= 4 {
+            next(1);
+        }
         match (&mut p.implicit, self.viscous_change) {
             (Some(implicit), true) => {
-                next(1);
                 for a in 0..3 {
                     for (v, b) in implicit.viscous_change[a][..n].iter_mut().zip(next(rb * n).chunks_exact(rb)) {
                         *v = real(b);
@@ -454,6 +476,21 @@ impl Checkpoint {
             (None, false) => {}
             (Some(_), false) => return Err("has no implicit viscosity state, and the scene solves viscosity implicitly".into()),
             (None, true) => return Err("holds implicit viscosity state, and the scene solves viscosity explicitly".into()),
+        }
+        if self.version >= 5 {
+            next(1);
+        }
+        match (&mut p.pressure_solve, self.stiffness_sums) {
+            (Some(pressure), true) => {
+                for sum in &mut pressure.stiffness_sums {
+                    for (v, b) in sum[..n].iter_mut().zip(next(rb * n).chunks_exact(rb)) {
+                        *v = real(b);
+                    }
+                }
+            }
+            (None, false) => {}
+            (Some(_), false) => return Err("has no pressure solve state, and the scene solves pressure".into()),
+            (None, true) => return Err("holds pressure solve state, and the scene does not solve pressure".into()),
         }
         if p.id[..n].iter().any(|&id| id >= self.next_id) {
             return Err(format!("holds a particle id at or above its next id {}", self.next_id));

@@ -38,7 +38,10 @@ impl Progress {
         }
         self.last_report = Instant::now();
         let rate = (sim.steps - self.start_steps) as f64 / wall.as_secs_f64().max(1e-9);
-        let solve = sim.solves.last.map_or(String::new(), |s| format!(" | {} CG iterations", s.iterations));
+        let mut solve = sim.solves.last.map_or(String::new(), |s| format!(" | {} CG iterations", s.iterations));
+        if let (Some(divergence), Some(density)) = (sim.divergence_solves.last, sim.density_solves.last) {
+            solve += &format!(" | pressure {}+{} sweeps", divergence.iterations, density.iterations);
+        }
         let line = format!(
             "t = {:.4}/{end} s | {rate:.0} steps/s | {} fluid particles{} | dt {:.2e} s ({}){solve}",
             sim.time,

@@ -26,15 +26,21 @@ pub struct Summary {
     /// The implicit viscosity solves of this process's steps, where viscosity is solved
     /// implicitly.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub implicit_viscosity: Option<ImplicitSolves>,
+    pub implicit_viscosity: Option<Solves>,
+    /// The divergence-free pressure's divergence and density solves of this process's steps,
+    /// where pressure is solved.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub divergence_solve: Option<Solves>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub density_solve: Option<Solves>,
     /// The `.pvd` series that ParaView opens, where the run writes `.vtu` frames.
     #[serde(skip)]
     pub series: Option<PathBuf>,
 }
 
-/// The implicit viscosity solves of a run and their settings.
+/// The solves of one kind of a run, and their settings.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct ImplicitSolves {
+pub struct Solves {
     pub mean_iterations: f64,
     pub largest_iterations: u32,
     /// Steps whose solve stopped above its tolerance.
@@ -53,12 +59,19 @@ impl fmt::Display for Summary {
         writeln!(f, "max compression        {:.3e} ((rho-rho0)/rho0)", self.max_compression)?;
         writeln!(f, "max speed              {:.4} m/s (Mach {:.3})", self.max_speed_m_s, self.max_mach)?;
         writeln!(f, "removed (left domain)  {}", self.removed)?;
-        if let Some(s) = &self.implicit_viscosity {
-            writeln!(
-                f,
-                "implicit viscosity     {:.1} iterations a step on average, {} at most (tolerance {:.0e}, at most {}); {} step(s) unconverged",
-                s.mean_iterations, s.largest_iterations, s.tolerance, s.max_iterations, s.unconverged_steps
-            )?;
+        let solves = [
+            ("implicit viscosity", &self.implicit_viscosity),
+            ("divergence solve", &self.divergence_solve),
+            ("density solve", &self.density_solve),
+        ];
+        for (name, s) in solves {
+            if let Some(s) = s {
+                writeln!(
+                    f,
+                    "{name:<22} {:.1} iterations a step on average, {} at most (tolerance {:.0e}, at most {}); {} step(s) unconverged",
+                    s.mean_iterations, s.largest_iterations, s.tolerance, s.max_iterations, s.unconverged_steps
+                )?;
+            }
         }
         write!(f, "frames                 {}", self.frames)?;
         if let Some((t, capacity)) = self.capacity_reached {

@@ -9,7 +9,6 @@ use super::{io_error, Device, RunError, RunOptions, Summary, Tally};
 use crate::cpu::parallel::on_worker;
 use crate::output::vtu::{encode, Field};
 use crate::output::write_atomically;
-use crate::run::summary::ImplicitSolves;
 use crate::scene::setup::InitialParticles;
 use crate::scene::{Scene, SceneError};
 use crate::simulation::backend::Backend;
@@ -198,13 +197,13 @@ impl WallClock {
             removed: run.removed,
             frames: tally.frame_times.len(),
             capacity_reached: run.capacity_reached_at.map(|t| (t, run.fluid_capacity())),
-            implicit_viscosity: run.implicit.map(|settings| ImplicitSolves {
-                mean_iterations: run.solves.mean_iterations(),
-                largest_iterations: run.solves.largest_iterations,
-                unconverged_steps: run.solves.unconverged,
-                tolerance: settings.tolerance,
-                max_iterations: settings.max_iterations,
-            }),
+            implicit_viscosity: run.implicit.map(|settings| run.solves.summary(settings.tolerance, settings.max_iterations)),
+            divergence_solve: run
+                .pressure_solve
+                .map(|settings| run.divergence_solves.summary(settings.divergence_tolerance, settings.max_iterations)),
+            density_solve: run
+                .pressure_solve
+                .map(|settings| run.density_solves.summary(settings.density_tolerance, settings.max_iterations)),
             series,
         }
     }

@@ -5,8 +5,8 @@ use super::{
     short, Boundary, Domain, Material, Nozzle, NozzleMotion, Output, Scene, SceneError, VelocityGradient, ViscosityOperator,
     ViscositySolver,
 };
-use super::{Precision, SimulationSettings, MAX_HOURGLASS_CONTROL, MAX_PARTICLE_SHIFTING};
-use crate::simulation::time_step::{Limit, StabilityBound};
+use super::{DensityEquation, Precision, Pressure, SimulationSettings, Walls, MAX_HOURGLASS_CONTROL, MAX_PARTICLE_SHIFTING};
+use crate::simulation::time_step::{Cfl, Limit, StabilityBound, TimeStepper};
 
 /// Iterations an implicit solve may be allowed: a solve needing more at the chosen dt is
 /// better served by a smaller dt.
@@ -307,6 +307,9 @@ impl Check<'_> {
             (0.0, MAX_PARTICLE_SHIFTING),
             "dimensionless; 0 turns it off, 2 is Skillen et al.'s",
         )?;
+        if s.pressure == Pressure::DivergenceFree {
+            self.divergence_free(s, m)?;
+        }
         let ts = &s.time_step;
         self.positive("simulation.time_step.safety_factor", ts.safety_factor)?;
         if ts.safety_factor > 1.0 && !ts.allow_above_stability_bound {
@@ -321,8 +324,7 @@ impl Check<'_> {
         }
         if let Some(dt) = ts.fixed_s {
             self.positive("simulation.time_step.fixed_s", dt)?;
-            let (limit_dt, limit) =
-                StabilityBound::new(h, m.sound_speed_m_s, m.viscosity.bounding_viscosity(m.viscosity.nu0_m2_s)).dt();
+            let (limit_dt, limit) = stability_bound(s, m, h, m.viscosity.nu0_m2_s).dt();
             if dt > limit_dt && !ts.allow_above_stability_bound {
                 return self.fail(
                     "simulation.time_step.fixed_s",
@@ -355,6 +357,35 @@ impl Check<'_> {
             );
         }
         Ok(())
+    }
+
+    fn divergence_free(&self, s: &SimulationSettings, m: &Material) -> Checked {
+        if m.density_equation == DensityEquation::Continuity {
+            return self.fail(
+                "simulation.pressure",
+                "\"divergence_free\" corrects the summed density of Eq. (5); set material.density_equation = \"summation\""
+                    .into(),
+            );
+        }
+        if s.walls == Walls::Mirrored {
+            return self.fail(
+                "simulation.pressure",
+                "\"divergence_free\" runs with the paper's walls; set simulation.walls = \"paper\"".into(),
+            );
+        }
+        let d = &s.divergence_free;
+        let tolerance = "a fraction of rho0, from 1e-6 to 0.1";
+        self.within("simulation.divergence_free.density_tolerance", d.density_tolerance, (1e-6, 0.1), tolerance)?;
+        self.within("simulation.divergence_free.divergence_tolerance", d.divergence_tolerance, (1e-6, 0.1), tolerance)?;
+        if !(1..=MAX_IMPLICIT_ITERATIONS).contains(&d.max_iterations) {
+            return self.fail(
+                "simulation.divergence_free.max_iterations",
+                format!("must be from 1 to {MAX_IMPLICIT_ITERATIONS}, got {}", d.max_iterations),
+            );
+        }
+        self.positive("simulation.divergence_free.cfl_factor", d.cfl_factor)?;
+        self.within("simulation.divergence_free.cfl_factor", d.cfl_factor, (0.0, 1.0), "dimensionless, above 0 and at most 1")?;
+        self.positive("simulation.divergence_free.max_time_step_s", d.max_time_step_s)
     }
 
     /// `steps`: the fewest steps the run can take (at its largest dt).
@@ -567,9 +598,24 @@ fn largest_dt(s: &SimulationSettings, m: &Material, h: f64) -> (f64, Limit) {
         Some(dt) => (dt, Limit::Fixed),
         None => {
             let v = &m.viscosity;
-            let (dt, limit) = StabilityBound::new(h, m.sound_speed_m_s, v.bounding_viscosity(v.nu0_m2_s.max(v.nu_inf()))).dt();
-            (dt * s.time_step.safety_factor, limit)
+            let bound = stability_bound(s, m, h, v.nu0_m2_s.max(v.nu_inf()));
+            let cfl = (s.pressure == Pressure::DivergenceFree).then(|| Cfl {
+                factor: s.divergence_free.cfl_factor,
+                spacing_m: m.particle_spacing_m,
+                largest_s: s.divergence_free.max_time_step_s,
+            });
+            TimeStepper { bound, support_radius: h, safety_factor: s.time_step.safety_factor, fixed: None, cfl }.next(0.0)
         }
+    }
+}
+
+/// Eq. (10) for the scene, at the largest viscosity `nu` (m^2/s): without its acoustic term
+/// where pressure is solved.
+fn stability_bound(s: &SimulationSettings, m: &Material, h: f64, nu: f64) -> StabilityBound {
+    let bound = StabilityBound::new(h, m.sound_speed_m_s, m.viscosity.bounding_viscosity(nu));
+    match s.pressure {
+        Pressure::WeaklyCompressible => bound,
+        Pressure::DivergenceFree => bound.incompressible(),
     }
 }
 

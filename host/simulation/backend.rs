@@ -11,6 +11,9 @@ use coil_kernels::cell_grid::{Neighborhood, Neighbors};
 use coil_kernels::continuity_molteni2009::{ContinuityArgs, DensityIntegrationArgs};
 use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::density::{DensityArgs, DensityKernel};
+use coil_kernels::dfsph_bender2017::{
+    DensityErrorArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, WarmStartArgs,
+};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::LeapfrogArgs;
 use coil_kernels::mirrored_wall::MirroredWallArgs;
@@ -63,6 +66,14 @@ pub trait Passes<R: Real, T: Topology, N: Neighbors> {
     /// `partial` and added in range order: the same on every backend and thread count. A
     /// backend that failed returns NaN and reports the fault when the schedule ends.
     fn dots(&mut self, args: DotArgs<'_, R>, partial: ViewMut<'_, [f64; 2]>) -> [f64; 2];
+    fn dfsph_factor(&mut self, args: FactorArgs<'_, R, N>);
+    fn divergence_error(&mut self, args: DivergenceErrorArgs<'_, R, N>);
+    fn density_error(&mut self, args: DensityErrorArgs<'_, R, N>);
+    fn pressure_change(&mut self, args: PressureChangeArgs<'_, R, N>);
+    fn warm_start(&mut self, args: WarmStartArgs<'_, R>);
+    /// The error of `args` summed over the live fluid particles, and their count, in range
+    /// order as [`Passes::dots`].
+    fn error_sums(&mut self, args: ErrorSumArgs<'_, R>, partial: ViewMut<'_, [f64; 2]>) -> [f64; 2];
 }
 
 /// A backend's particle buffers as views over its own memory, live particles only, in the
@@ -99,6 +110,8 @@ pub struct ParticleViews<'a, R, T, N> {
     pub wall_mirror: Option<Vec3View<'a, f64>>,
     /// Present where viscosity is solved implicitly.
     pub implicit: Option<ImplicitViews<'a, R>>,
+    /// Present where pressure is solved for a divergence-free flow.
+    pub pressure_solve: Option<PressureViews<'a, R>>,
 }
 
 /// The implicit viscosity solve's arrays as views (`coil_kernels::viscosity::implicit_weiler2018`).
@@ -115,6 +128,20 @@ pub struct ImplicitViews<'a, R> {
     pub block: SymTensorViewMut<'a, R>,
     /// One entry per range of `DOT_RANGE` particles.
     pub partial_dots: ViewMut<'a, [f64; 2]>,
+}
+
+/// The divergence-free pressure solves' arrays as views (`coil_kernels::dfsph_bender2017`).
+#[derive(Clone, Copy)]
+pub struct PressureViews<'a, R> {
+    pub factor: ViewMut<'a, R>,
+    pub stiffness: ViewMut<'a, R>,
+    pub error: ViewMut<'a, R>,
+    /// The divergence solve's stiffness sums, carried from step to step.
+    pub divergence_sum: ViewMut<'a, R>,
+    /// The density solve's stiffness sums, carried from step to step: p / rho^2.
+    pub density_sum: ViewMut<'a, R>,
+    /// One entry per range of `ERROR_RANGE` particles.
+    pub partial_sums: ViewMut<'a, [f64; 2]>,
 }
 
 /// A sequence of passes over a backend's views, generic over how it visits neighbors: a

@@ -67,6 +67,7 @@ impl<R: Real, Op: ImplicitOperator<R>> Model<R> for ImplicitModel<Op> {
         density_rate: false,
         shift: false,
         implicit: true,
+        pressure_solve: false,
     };
     type Law = Op::Law;
     fn law(&self) -> Self::Law {

@@ -2,6 +2,7 @@
 //! through Algorithm 1 by one schedule that every backend runs.
 
 pub mod backend;
+pub mod divergence_free;
 pub mod implicit_viscosity;
 pub mod inlet;
 pub mod model;
@@ -12,11 +13,12 @@ pub mod time_step;
 use crate::cpu::neighbor_grid::NeighborGrid;
 use crate::cpu::CpuBackend;
 use crate::scene::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, InitialParticles};
-use crate::scene::{DensityKernelKind, Scene, ViscositySolver, ViscousVelocity, Walls};
+use crate::scene::{DensityKernelKind, Pressure, Scene, ViscositySolver, ViscousVelocity, Walls};
+use crate::simulation::divergence_free::PressureSolve;
 use crate::simulation::inlet::Inlet;
 use crate::simulation::model::{ImplicitStep, Model, ParticleState, SolveReport};
 use crate::simulation::particles::{HostParticles, Particles};
-use crate::simulation::time_step::{Limit, StabilityBound, TimeStepper};
+use crate::simulation::time_step::{Cfl, Limit, StabilityBound, TimeStepper};
 use backend::{Backend, ParticleViews, Passes, Schedule};
 use coil_kernels::cell_grid::Neighbors;
 use coil_kernels::continuity_molteni2009::{ContinuityArgs, DensityIntegrationArgs};
@@ -60,23 +62,45 @@ pub struct Instability {
     pub unconverged_solve: Option<Box<UnconvergedSolve>>,
 }
 
-/// An implicit viscosity solve that stopped above its tolerance.
+/// A solve that stopped above its tolerance.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct UnconvergedSolve {
+    pub solve: Solve,
     pub iterations: u32,
-    /// The last residual's norm over that of v*.
+    /// The last residual's norm over that of v* (implicit viscosity), or the fluid's mean
+    /// error over rho0 (pressure).
     pub relative_residual: f64,
     pub tolerance: f64,
+}
+
+/// Which solve of a step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Solve {
+    ImplicitViscosity,
+    /// The divergence-free pressure's divergence solve.
+    Divergence,
+    /// The divergence-free pressure's density solve.
+    Density,
 }
 
 impl fmt::Display for Instability {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         if let Some(solve) = &self.unconverged_solve {
-            return write!(
-                f,
-                "the implicit viscosity solve did not converge at step {} (t = {:.6e} s, dt = {:.3e} s): after {} iterations its residual was {:.3e} of its first, above the tolerance {:.1e}. Raise material.viscosity.implicit.max_iterations, lower dt (simulation.time_step.safety_factor or fixed_s), or set material.viscosity.implicit.on_no_convergence = \"warn\" to go on and count such steps.",
-                self.step, self.time_s, self.dt_s, solve.iterations, solve.relative_residual, solve.tolerance
-            );
+            let (step, t, dt) = (self.step, self.time_s, self.dt_s);
+            let (iterations, error, tolerance) = (solve.iterations, solve.relative_residual, solve.tolerance);
+            return match solve.solve {
+                Solve::ImplicitViscosity => write!(
+                    f,
+                    "the implicit viscosity solve did not converge at step {step} (t = {t:.6e} s, dt = {dt:.3e} s): after {iterations} iterations its residual was {error:.3e} of its first, above the tolerance {tolerance:.1e}. Raise material.viscosity.implicit.max_iterations, lower dt (simulation.time_step.safety_factor or fixed_s), or set material.viscosity.implicit.on_no_convergence = \"warn\" to go on and count such steps."
+                ),
+                Solve::Divergence | Solve::Density => {
+                    let name = if solve.solve == Solve::Divergence { "divergence" } else { "density" };
+                    write!(
+                        f,
+                        "the {name} solve did not converge at step {step} (t = {t:.6e} s, dt = {dt:.3e} s): after {iterations} sweeps the fluid's mean {name} error was {error:.3e} of rho0, above the tolerance {tolerance:.1e}. Raise simulation.divergence_free.max_iterations, lower simulation.divergence_free.cfl_factor or max_time_step_s, or set simulation.divergence_free.on_no_convergence = \"warn\" to go on and count such steps."
+                    )
+                }
+            };
         }
         match &self.non_finite {
             Some(what) => write!(
@@ -188,10 +212,13 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
         let n = particles.len();
         particles.density[..n].fill(R::from_f64(mat.rest_density_kg_m3));
         let g = mat.gravity_m_s2;
+        let divergence_free = scene.simulation.pressure == Pressure::DivergenceFree;
+        // A solved pressure replaces Eq. (6): with c = 0 the acceleration pass adds none.
+        let sound_speed2 = if divergence_free { 0.0 } else { mat.sound_speed_m_s * mat.sound_speed_m_s };
         let fluid = Fluid {
             mass: R::from_f64(mass),
             rest_density: R::from_f64(mat.rest_density_kg_m3),
-            sound_speed2: R::from_f64(mat.sound_speed_m_s * mat.sound_speed_m_s),
+            sound_speed2: R::from_f64(sound_speed2),
             pressure_floor: R::from_f64(if mat.clamp_negative_pressure { 0.0 } else { f64::NEG_INFINITY }),
             wall_density_floor: R::from_f64(if mat.clamp_negative_pressure { 0.0 } else { mat.rest_density_kg_m3 }),
             pressure_pair_weight: R::from_f64(mat.pressure_gradient.pair_weight()),
@@ -200,15 +227,15 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
             boundary_count: boundary_count as u32,
         };
         let ts = &scene.simulation.time_step;
+        let bound =
+            StabilityBound::new(h, mat.sound_speed_m_s, mat.viscosity.bounding_viscosity(model.law().max_viscosity().to_f64()));
+        let df = scene.simulation.divergence_free;
         let stepper = TimeStepper {
-            bound: StabilityBound::new(
-                h,
-                mat.sound_speed_m_s,
-                mat.viscosity.bounding_viscosity(model.law().max_viscosity().to_f64()),
-            ),
+            bound: if divergence_free { bound.incompressible() } else { bound },
             support_radius: h,
             safety_factor: ts.safety_factor,
             fixed: ts.fixed_s,
+            cfl: divergence_free.then_some(Cfl { factor: df.cfl_factor, spacing_m: s, largest_s: df.max_time_step_s }),
         };
         let d = &scene.domain;
         let diagonal = (0..3).map(|a| (d.max_m[a] - d.min_m[a]).powi(2)).sum::<f64>().sqrt();
@@ -242,6 +269,9 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
             shifting,
             implicit: (mat.viscosity.solver == ViscositySolver::Implicit).then_some(mat.viscosity.implicit),
             solves: Default::default(),
+            pressure_solve: divergence_free.then_some(df),
+            divergence_solves: Default::default(),
+            density_solves: Default::default(),
         };
         let wall_mirror = (scene.simulation.walls == Walls::Mirrored)
             .then(|| [0, 1, 2].map(|a| initial.boundary_mirror.iter().map(|m| m[a]).collect()));
@@ -321,12 +351,16 @@ impl<R: Real, M: Model<R>, B: Backend<R>> Simulation<R, M, B> {
             self.run.count_removed(removed);
             // Lines 5-19: density and pressure, stress, accelerations, nozzles, leap-frog.
             let kick_dt = self.run.kick_dt(dt);
-            let mut solve = None;
-            let forces = ForcesAndMotion { run: &self.run, dt, kick_dt, solve: &mut solve };
+            let (mut solve, mut pressure_solves) = (None, None);
+            let forces =
+                ForcesAndMotion { run: &self.run, dt, kick_dt, solve: &mut solve, pressure_solves: &mut pressure_solves };
             in_topology(&mut self.backend, forces).map_err(StepError::Backend)?;
             self.run.advance_clock(dt, limit);
             if let Some(report) = solve {
                 self.run.record_solve(report)?;
+            }
+            if let Some(reports) = pressure_solves {
+                self.run.record_pressure_solves(reports)?;
             }
             if self.backend.diagnostics_due(self.run.steps) {
                 self.read_diagnostics()?;
@@ -431,6 +465,8 @@ struct ForcesAndMotion<'r, R: Real, M: Model<R>> {
     kick_dt: f64,
     /// How the implicit viscosity solve went, where there is one.
     solve: &'r mut Option<SolveReport>,
+    /// How the divergence and density solves went, where pressure is solved.
+    pressure_solves: &'r mut Option<[SolveReport; 2]>,
 }
 
 impl<R: Real, M: Model<R>> Schedule<R> for ForcesAndMotion<'_, R, M> {
@@ -439,6 +475,25 @@ impl<R: Real, M: Model<R>> Schedule<R> for ForcesAndMotion<'_, R, M> {
         let fluid = run.fluid;
         // Lines 5-8.
         density(run, &v, passes);
+        let pressure_solve = run.pressure_solve.zip(v.pressure_solve).map(|(settings, arrays)| PressureSolve {
+            settings,
+            neighborhood: v.neighbors,
+            fluid,
+            dt: R::from_f64(self.dt),
+            kick_dt: R::from_f64(self.kick_dt),
+            id: v.id,
+            position: v.position.read(),
+            density: v.density.read(),
+            velocity_half: v.velocity_half,
+            acceleration: v.acceleration,
+            arrays,
+            inlets: run.inlets(),
+            time: run.time,
+        });
+        let divergence = pressure_solve.as_ref().map(|solve| {
+            solve.factors(passes);
+            solve.divergence(passes)
+        });
         let viscous_velocity = match run.viscous_velocity {
             ViscousVelocity::FullStep => v.velocity,
             ViscousVelocity::HalfStep => v.velocity_half,
@@ -487,6 +542,10 @@ impl<R: Real, M: Model<R>> Schedule<R> for ForcesAndMotion<'_, R, M> {
                 acceleration: v.acceleration,
                 velocity_half: v.velocity_half,
             });
+        }
+        // Pressure last: the density the step ends at counts gravity and viscosity.
+        if let (Some(solve), Some(divergence)) = (&pressure_solve, divergence) {
+            *self.pressure_solves = Some([divergence, solve.density(passes)]);
         }
         // The continuity equation's density after the accelerations have read this step's.
         if let Some(density_rate) = v.density_rate {

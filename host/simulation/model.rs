@@ -223,6 +223,7 @@ impl<R: Real, Rh: Rheology<R> + 'static, G: GradientEstimate> Model<R> for Stres
         density_rate: false,
         shift: false,
         implicit: false,
+        pressure_solve: false,
     };
     type Law = Rh;
     fn law(&self) -> Self::Law {
@@ -257,6 +258,7 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for HourglassStressModel<Rh, R
         density_rate: false,
         shift: false,
         implicit: false,
+        pressure_solve: false,
     };
     type Law = Rh;
     fn law(&self) -> Self::Law {
@@ -297,6 +299,7 @@ impl<R: Real> Model<R> for LaplacianModel<R> {
         density_rate: false,
         shift: false,
         implicit: false,
+        pressure_solve: false,
     };
     type Law = Newtonian<R>;
     fn law(&self) -> Self::Law {
@@ -322,6 +325,7 @@ impl<R: Real> Model<R> for MorrisModel<R> {
         density_rate: false,
         shift: false,
         implicit: false,
+        pressure_solve: false,
     };
     type Law = Newtonian<R>;
     fn law(&self) -> Self::Law {
@@ -346,6 +350,7 @@ impl<R: Real, Rh: Rheology<R> + 'static> Model<R> for ShearThinningMorrisModel<R
         density_rate: false,
         shift: false,
         implicit: false,
+        pressure_solve: false,
     };
     type Law = Rh;
     fn law(&self) -> Self::Law {

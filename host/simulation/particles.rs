@@ -1,7 +1,9 @@
 //! Structure-of-arrays particle storage, allocated once to the run's capacity.
 
+use crate::scene::Pressure;
 use crate::scene::{DensityEquation, Scene};
-use crate::simulation::backend::ImplicitViews;
+use crate::simulation::backend::{ImplicitViews, PressureViews};
+use coil_kernels::dfsph_bender2017::ERROR_RANGE;
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::viscosity::implicit_weiler2018::DOT_RANGE;
 use coil_kernels::Real;
@@ -23,6 +25,8 @@ pub struct ModelFields {
     pub shift: bool,
     /// The implicit viscosity solve's vectors and preconditioner blocks.
     pub implicit: bool,
+    /// The divergence-free pressure solves' factors, stiffnesses and errors.
+    pub pressure_solve: bool,
 }
 
 impl ModelFields {
@@ -32,6 +36,7 @@ impl ModelFields {
         Self {
             density_rate: scene.material.density_equation == DensityEquation::Continuity,
             shift: scene.simulation.particle_shifting > 0.0,
+            pressure_solve: scene.simulation.pressure == Pressure::DivergenceFree,
             ..self
         }
     }
@@ -93,6 +98,51 @@ impl<R: Real> ImplicitArrays<R> {
     }
 }
 
+/// The divergence-free pressure solves' per-particle arrays (`coil_kernels::dfsph_bender2017`).
+pub struct PressureArrays<R> {
+    /// alpha_i (m^5/kg).
+    pub factor: Vec<R>,
+    /// This sweep's stiffness p / rho^2 (m^5/(kg s^2)).
+    pub stiffness: Vec<R>,
+    /// This sweep's density error (kg/m^3).
+    pub error: Vec<R>,
+    /// The last step's stiffness sums of the divergence and the density solve, each solve's
+    /// warm start: state that the sort reorders and checkpoints keep. rho^2 times the density
+    /// solve's is the pressure the frames show.
+    pub stiffness_sums: [Vec<R>; 2],
+    /// One pair (error sum, fluid count) per range of `ERROR_RANGE` particles.
+    pub partial_sums: Vec<[f64; 2]>,
+}
+
+impl<R: Real> PressureArrays<R> {
+    /// Five scalars per particle (the partial sums, one pair per `ERROR_RANGE` particles, add a
+    /// sixteenth of a byte).
+    pub const BYTES_PER_PARTICLE: usize = 5 * std::mem::size_of::<R>();
+
+    pub fn with_capacity(capacity: usize) -> Self {
+        Self {
+            factor: zeros(capacity),
+            stiffness: zeros(capacity),
+            error: zeros(capacity),
+            stiffness_sums: [zeros(capacity), zeros(capacity)],
+            partial_sums: zeros(capacity.div_ceil(ERROR_RANGE)),
+        }
+    }
+
+    /// The arrays as views over the first `n` particles.
+    pub fn views(&mut self, n: usize) -> PressureViews<'_, R> {
+        let [divergence_sum, density_sum] = &mut self.stiffness_sums;
+        PressureViews {
+            factor: view_mut(&mut self.factor, n),
+            stiffness: view_mut(&mut self.stiffness, n),
+            error: view_mut(&mut self.error, n),
+            divergence_sum: view_mut(divergence_sum, n),
+            density_sum: view_mut(density_sum, n),
+            partial_sums: view_mut(&mut self.partial_sums, n.div_ceil(ERROR_RANGE)),
+        }
+    }
+}
+
 /// Every per-particle array of a run. Arrays hold `capacity` entries; the first `len` are live.
 /// Boundary particles come first by id (ids below `boundary_count`), but after the first sort
 /// they are interleaved with the fluid in cell order.
@@ -128,6 +178,9 @@ pub struct Particles<R> {
     /// The implicit viscosity solve's arrays, scratch within a step. Allocated only where
     /// viscosity is solved implicitly.
     pub implicit: Option<ImplicitArrays<R>>,
+    /// The pressure solves' arrays, scratch within a step. Allocated only where pressure is
+    /// solved for a divergence-free flow.
+    pub pressure_solve: Option<PressureArrays<R>>,
     /// Targets of the reorder, swapped with the field they receive.
     pub(crate) scratch_f64: Vec<f64>,
     pub(crate) scratch_real: Vec<R>,
@@ -157,6 +210,7 @@ impl<R: Real> Particles<R> {
             density_rate: fields.density_rate.then(|| zeros(capacity)),
             shift: fields.shift.then(|| core::array::from_fn(|_| zeros(capacity))),
             implicit: fields.implicit.then(|| ImplicitArrays::with_capacity(capacity)),
+            pressure_solve: fields.pressure_solve.then(|| PressureArrays::with_capacity(capacity)),
             scratch_f64: zeros(capacity),
             scratch_real: zeros(capacity),
             scratch_u32: zeros(capacity),
@@ -195,6 +249,11 @@ impl<R: Real> Particles<R> {
                 implicit.viscous_change[a][i] = R::ZERO;
             }
         }
+        if let Some(pressure) = &mut self.pressure_solve {
+            for sum in &mut pressure.stiffness_sums {
+                sum[i] = R::ZERO;
+            }
+        }
         self.id[i] = id;
         self.len += 1;
     }
@@ -208,6 +267,7 @@ impl<R: Real> Particles<R> {
             density_rate: self.density_rate.is_some(),
             shift: self.shift.is_some(),
             implicit: self.implicit.is_some(),
+            pressure_solve: self.pressure_solve.is_some(),
         }
     }
 
@@ -233,8 +293,20 @@ impl<R: Real> Particles<R> {
         let density_rate = if fields.density_rate { r } else { 0 };
         let shift = if fields.shift { 3 * r } else { 0 };
         let implicit = if fields.implicit { ImplicitArrays::<R>::BYTES_PER_PARTICLE } else { 0 };
+        let pressure_solve = if fields.pressure_solve { PressureArrays::<R>::BYTES_PER_PARTICLE } else { 0 };
         let scratch = 8 + r + 4;
-        position + velocities_and_acceleration + 4 + r + stress + viscosity + gradient + density_rate + shift + implicit + scratch
+        position
+            + velocities_and_acceleration
+            + 4
+            + r
+            + stress
+            + viscosity
+            + gradient
+            + density_rate
+            + shift
+            + implicit
+            + pressure_solve
+            + scratch
     }
 
     pub fn position_view(&self) -> Vec3View<'_, f64> {

@@ -1,8 +1,9 @@
 //! The state of a run that is the same on every backend: the fluid's constants, the physics
 //! variant, the clock and time step, the inlets, the particle counts and the guard.
 
-use super::{Diagnostics, Instability, UnconvergedSolve};
-use crate::scene::{DensityKernelKind, ImplicitViscosity, NoConvergence, ViscousVelocity};
+use super::{Diagnostics, Instability, Solve, UnconvergedSolve};
+use crate::run::summary::Solves;
+use crate::scene::{DensityKernelKind, DivergenceFree, ImplicitViscosity, NoConvergence, ViscousVelocity};
 use crate::simulation::inlet::Inlet;
 use crate::simulation::model::{Model, SolveReport};
 use crate::simulation::particles::Particles;
@@ -52,9 +53,14 @@ pub struct RunState<R: Real, M: Model<R>> {
     pub implicit: Option<ImplicitViscosity>,
     /// The implicit solves of this run so far.
     pub solves: SolveStatistics,
+    /// The pressure solves' settings, where pressure is solved for a divergence-free flow.
+    pub pressure_solve: Option<DivergenceFree>,
+    /// The divergence and density solves of this run so far.
+    pub divergence_solves: SolveStatistics,
+    pub density_solves: SolveStatistics,
 }
 
-/// Conjugate-gradient iterations of a run's implicit viscosity solves.
+/// Iterations of a run's solves of one kind.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SolveStatistics {
     pub steps: u64,
@@ -66,6 +72,27 @@ pub struct SolveStatistics {
 }
 
 impl SolveStatistics {
+    fn record(&mut self, report: SolveReport) {
+        self.steps += 1;
+        self.iterations += u64::from(report.iterations);
+        self.largest_iterations = self.largest_iterations.max(report.iterations);
+        self.last = Some(report);
+        if !report.converged {
+            self.unconverged += 1;
+        }
+    }
+
+    /// What the summary says of these solves, run at `tolerance` and `max_iterations`.
+    pub fn summary(&self, tolerance: f64, max_iterations: u32) -> Solves {
+        Solves {
+            mean_iterations: self.mean_iterations(),
+            largest_iterations: self.largest_iterations,
+            unconverged_steps: self.unconverged,
+            tolerance,
+            max_iterations,
+        }
+    }
+
     /// Mean iterations per step.
     pub fn mean_iterations(&self) -> f64 {
         if self.steps == 0 {
@@ -195,27 +222,41 @@ impl<R: Real, M: Model<R>> RunState<R, M> {
     /// Counts a step's implicit solve; a solve that missed its tolerance stops the run unless
     /// the scene asks to go on.
     pub(crate) fn record_solve(&mut self, report: SolveReport) -> Result<(), Instability> {
-        let stats = &mut self.solves;
-        stats.steps += 1;
-        stats.iterations += u64::from(report.iterations);
-        stats.largest_iterations = stats.largest_iterations.max(report.iterations);
-        stats.last = Some(report);
-        if report.converged {
-            return Ok(());
-        }
-        stats.unconverged += 1;
+        self.solves.record(report);
         match self.implicit {
-            Some(settings) if settings.on_no_convergence == NoConvergence::Stop => {
-                let mut diagnosis = self.instability(0, None);
-                diagnosis.unconverged_solve = Some(Box::new(UnconvergedSolve {
-                    iterations: report.iterations,
-                    relative_residual: report.relative_residual,
-                    tolerance: settings.tolerance,
-                }));
-                Err(diagnosis)
+            Some(settings) if !report.converged && settings.on_no_convergence == NoConvergence::Stop => {
+                Err(self.unconverged(Solve::ImplicitViscosity, report, settings.tolerance))
             }
             _ => Ok(()),
         }
+    }
+
+    /// Counts a step's divergence and density solves; one that missed its tolerance stops the
+    /// run where the scene asks.
+    pub(crate) fn record_pressure_solves(&mut self, [divergence, density]: [SolveReport; 2]) -> Result<(), Instability> {
+        self.divergence_solves.record(divergence);
+        self.density_solves.record(density);
+        let Some(settings) = self.pressure_solve else { return Ok(()) };
+        if settings.on_no_convergence == NoConvergence::Stop {
+            if !divergence.converged {
+                return Err(self.unconverged(Solve::Divergence, divergence, settings.divergence_tolerance));
+            }
+            if !density.converged {
+                return Err(self.unconverged(Solve::Density, density, settings.density_tolerance));
+            }
+        }
+        Ok(())
+    }
+
+    fn unconverged(&self, solve: Solve, report: SolveReport, tolerance: f64) -> Instability {
+        let mut diagnosis = self.instability(0, None);
+        diagnosis.unconverged_solve = Some(Box::new(UnconvergedSolve {
+            solve,
+            iterations: report.iterations,
+            relative_residual: report.relative_residual,
+            tolerance,
+        }));
+        diagnosis
     }
 
     /// The guard: the latest diagnostics must show no runaway particle.

@@ -36,6 +36,7 @@ pub mod continuity_molteni2009;
 pub mod counting_sort;
 pub mod cross_viscosity;
 pub mod density;
+pub mod dfsph_bender2017;
 pub mod diagnostics;
 pub mod fluid;
 pub mod fluid_cells;

@@ -20,6 +20,10 @@ use crate::counting_sort::{
 };
 use crate::cross_viscosity::{Cross, Newtonian};
 use crate::density::{density_pass, DensityArgs, Poly6, Spiky};
+use crate::dfsph_bender2017::{
+    density_error_pass, divergence_error_pass, error_sum_pass, factor_pass, pressure_change_pass, warm_start_pass,
+    DensityErrorArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, WarmStartArgs,
+};
 use crate::diagnostics::{diagnostics_pass, DiagnosticsArgs, StateFigures};
 use crate::fluid_cells::{holds_fluid_pass, near_fluid_pass, HoldsFluidArgs, NearFluidArgs};
 use crate::leapfrog::{leapfrog_pass, LeapfrogArgs};
@@ -479,6 +483,40 @@ macro_rules! dots_kernel {
 
 dots_kernel!(dots_f32, f32);
 dots_kernel!(dots_f64, f64);
+per_neighborhood_kernels!(dfsph_factor_f32, dfsph_factor_periodic_f32, FactorArgs<f32>, factor_pass<f32>);
+per_neighborhood_kernels!(dfsph_factor_f64, dfsph_factor_periodic_f64, FactorArgs<f64>, factor_pass<f64>);
+per_neighborhood_kernels!(
+    divergence_error_f32,
+    divergence_error_periodic_f32,
+    DivergenceErrorArgs<f32>,
+    divergence_error_pass<f32>
+);
+per_neighborhood_kernels!(
+    divergence_error_f64,
+    divergence_error_periodic_f64,
+    DivergenceErrorArgs<f64>,
+    divergence_error_pass<f64>
+);
+per_neighborhood_kernels!(density_error_f32, density_error_periodic_f32, DensityErrorArgs<f32>, density_error_pass<f32>);
+per_neighborhood_kernels!(density_error_f64, density_error_periodic_f64, DensityErrorArgs<f64>, density_error_pass<f64>);
+per_neighborhood_kernels!(pressure_change_f32, pressure_change_periodic_f32, PressureChangeArgs<f32>, pressure_change_pass<f32>);
+per_neighborhood_kernels!(pressure_change_f64, pressure_change_periodic_f64, PressureChangeArgs<f64>, pressure_change_pass<f64>);
+per_index_kernel!(warm_start_f32, WarmStartArgs<'static, f32>, warm_start_pass::<f32>);
+per_index_kernel!(warm_start_f64, WarmStartArgs<'static, f64>, warm_start_pass::<f64>);
+
+/// One thread per range of `ERROR_RANGE` particles; ranges past the live count write zeros.
+macro_rules! error_sums_kernel {
+    ($name:ident, $t:ty) => {
+        entry!($name(r; count: View<'static, u32>, args: ErrorSumArgs<'static, $t>, out: ViewMut<'static, [f64; 2]>) {
+            if r < out.len() {
+                error_sum_pass(r, count.at(0) as usize, &args, out);
+            }
+        });
+    };
+}
+
+error_sums_kernel!(error_sums_f32, f32);
+error_sums_kernel!(error_sums_f64, f64);
 per_topology_kernels!(leapfrog_f32, leapfrog_periodic_f32, LeapfrogArgs<f32>, leapfrog_pass<f32>);
 per_topology_kernels!(leapfrog_f64, leapfrog_periodic_f64, LeapfrogArgs<f64>, leapfrog_pass<f64>);
 per_neighborhood_kernels!(shifting_f32, shifting_periodic_f32, ShiftingArgs<f32>, shifting_pass<f32>);
@@ -681,6 +719,26 @@ pub const ENTRIES: &[(&str, Emulated)] = {
         viscous_acceleration_f64,
         dots_f32,
         dots_f64,
+        dfsph_factor_f32,
+        dfsph_factor_periodic_f32,
+        dfsph_factor_f64,
+        dfsph_factor_periodic_f64,
+        divergence_error_f32,
+        divergence_error_periodic_f32,
+        divergence_error_f64,
+        divergence_error_periodic_f64,
+        density_error_f32,
+        density_error_periodic_f32,
+        density_error_f64,
+        density_error_periodic_f64,
+        pressure_change_f32,
+        pressure_change_periodic_f32,
+        pressure_change_f64,
+        pressure_change_periodic_f64,
+        warm_start_f32,
+        warm_start_f64,
+        error_sums_f32,
+        error_sums_f64,
         hash,
         density_f32,
         density_periodic_f32,

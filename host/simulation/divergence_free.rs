@@ -1,0 +1,160 @@
+//! The divergence-free pressure solves of a step (`coil_kernels::dfsph_bender2017`), written
+//! once over the backend's passes: the factors, the divergence solve on the half-step velocity
+//! before the model's accelerations, and the density solve on the acceleration after them.
+
+use crate::scene::DivergenceFree;
+use crate::simulation::backend::{Passes, PressureViews};
+use crate::simulation::inlet::Inlet;
+use crate::simulation::model::SolveReport;
+use coil_kernels::cell_grid::Neighbors;
+use coil_kernels::dfsph_bender2017::{
+    DensityErrorArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, WarmStartArgs,
+};
+use coil_kernels::fluid::Fluid;
+use coil_kernels::nozzle::NozzleArgs;
+use coil_kernels::topology::Topology;
+use coil_kernels::view::{Vec3View, Vec3ViewMut, View, ViewMut};
+use coil_kernels::Real;
+
+/// What one step's pressure solves read and write.
+pub struct PressureSolve<'a, R, N> {
+    pub settings: DivergenceFree,
+    pub neighborhood: N,
+    pub fluid: Fluid<R>,
+    /// The step's drift (s).
+    pub dt: R,
+    /// The step's kick (s).
+    pub kick_dt: R,
+    pub id: View<'a, u32>,
+    pub position: Vec3View<'a, f64>,
+    pub density: View<'a, R>,
+    /// v_{n-1/2} (m/s), which the divergence solve corrects.
+    pub velocity_half: Vec3ViewMut<'a, R>,
+    /// The step's acceleration (m/s^2), which the density solve corrects.
+    pub acceleration: Vec3ViewMut<'a, R>,
+    pub arrays: PressureViews<'a, R>,
+    /// The run's inlets, whose tubes set the velocity of the fluid inside them.
+    pub inlets: &'a [Inlet],
+    /// The step's start (s), where the tubes are.
+    pub time: f64,
+}
+
+impl<R: Real, N: Neighbors> PressureSolve<'_, R, N> {
+    /// Each particle's factor, Eq. (8), from this step's positions and densities.
+    pub fn factors<T: Topology, P: Passes<R, T, N>>(&self, backend: &mut P) {
+        backend.dfsph_factor(FactorArgs {
+            neighborhood: self.neighborhood,
+            fluid: self.fluid,
+            id: self.id,
+            density: self.density,
+            factor: self.arrays.factor,
+        });
+    }
+
+    /// Makes v_{n-1/2} divergence free where it compresses, Eq. (9), to the scene's divergence
+    /// tolerance.
+    pub fn divergence<T: Topology, P: Passes<R, T, N>>(&self, backend: &mut P) -> SolveReport {
+        let x = self.arrays;
+        let error = |backend: &mut P| {
+            backend.divergence_error(DivergenceErrorArgs {
+                neighborhood: self.neighborhood,
+                fluid: self.fluid,
+                dt: self.dt,
+                kick_dt: self.kick_dt,
+                id: self.id,
+                density: self.density,
+                factor: x.factor.read(),
+                velocity_half: self.velocity_half.read(),
+                stiffness: x.stiffness,
+                error: x.error,
+            })
+        };
+        self.sweeps(backend, self.settings.divergence_tolerance, error, self.velocity_half, self.kick_dt, x.divergence_sum)
+    }
+
+    /// Corrects the step's acceleration so that the density the step ends at is rho0, to the
+    /// scene's density tolerance.
+    pub fn density<T: Topology, P: Passes<R, T, N>>(&self, backend: &mut P) -> SolveReport {
+        let x = self.arrays;
+        let error = |backend: &mut P| {
+            backend.density_error(DensityErrorArgs {
+                neighborhood: self.neighborhood,
+                fluid: self.fluid,
+                dt: self.dt,
+                kick_dt: self.kick_dt,
+                id: self.id,
+                density: self.density,
+                factor: x.factor.read(),
+                velocity_half: self.velocity_half.read(),
+                acceleration: self.acceleration.read(),
+                stiffness: x.stiffness,
+                error: x.error,
+            })
+        };
+        self.sweeps(backend, self.settings.density_tolerance, error, self.acceleration, R::ONE, x.density_sum)
+    }
+
+    /// Jacobi sweeps, warm started from `stiffness_sum`: each adds `scale` times the pressure
+    /// acceleration of the last error's stiffness to `target`, until the fluid's mean error
+    /// over rho0 is within `tolerance`; `stiffness_sum` ends with what was applied.
+    fn sweeps<T: Topology, P: Passes<R, T, N>>(
+        &self,
+        backend: &mut P,
+        tolerance: f64,
+        error: impl Fn(&mut P),
+        target: Vec3ViewMut<'_, R>,
+        scale: R,
+        stiffness_sum: ViewMut<'_, R>,
+    ) -> SolveReport {
+        let x = self.arrays;
+        let rest_density = self.fluid.rest_density.to_f64();
+        let apply = |backend: &mut P| {
+            backend.pressure_change(PressureChangeArgs {
+                neighborhood: self.neighborhood,
+                fluid: self.fluid,
+                id: self.id,
+                stiffness: x.stiffness.read(),
+                scale,
+                target,
+                stiffness_sum,
+            });
+            self.hold_tubes(backend);
+        };
+        let mean_error = |backend: &mut P| {
+            error(backend);
+            let sums = ErrorSumArgs { fluid: self.fluid, id: self.id, error: x.error.read() };
+            let [sum, count] = backend.error_sums(sums, x.partial_sums);
+            if count > 0.0 {
+                sum / count / rest_density
+            } else {
+                0.0
+            }
+        };
+        error(backend);
+        backend.warm_start(WarmStartArgs { error: x.error.read(), stiffness_sum, stiffness: x.stiffness });
+        apply(backend);
+        let mut mean = mean_error(backend);
+        let mut iterations = 0;
+        while mean > tolerance && iterations < self.settings.max_iterations {
+            apply(backend);
+            mean = mean_error(backend);
+            iterations += 1;
+        }
+        SolveReport { iterations, relative_residual: mean, converged: mean <= tolerance }
+    }
+
+    /// The fluid inside a nozzle's tube keeps the tube's velocity through the sweeps: its
+    /// neighbors see it as the pipe imposes it (`coil_kernels::nozzle`).
+    fn hold_tubes<T: Topology, P: Passes<R, T, N>>(&self, backend: &mut P) {
+        for inlet in self.inlets {
+            backend.nozzle(NozzleArgs {
+                fluid: self.fluid,
+                tube: inlet.tube(self.time),
+                id: self.id,
+                position: self.position,
+                acceleration: self.acceleration,
+                velocity_half: self.velocity_half,
+            });
+        }
+    }
+}

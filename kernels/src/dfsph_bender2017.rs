@@ -1,0 +1,275 @@
+//! Divergence-free SPH: Bender and Koschier, "Divergence-Free SPH for Incompressible and Viscous
+//! Fluids" (IEEE TVCG 2017; SCA 2015). Pressure is not an equation of state but the solution of
+//! two constraints, each solved by a few Jacobi-style sweeps over per-particle factors:
+//!
+//! - the divergence solve makes the velocity field divergence free, D rho / Dt = 0 (Eq. 9), at
+//!   the start of a step;
+//! - the density solve, after gravity and viscosity, makes the density the step would end at
+//!   the rest density (Eq. 5-8).
+//!
+//! Both read one predicted density change over the step, dt sum_j m_j (v_i - v_j) . grad W_ij,
+//! with the spiky gradient of Eq. (7), and correct it with the pressure acceleration
+//! a_i = -sum_j m_j (s_i + s_j) grad W_ij, the symmetric pressure gradient with each particle's
+//! stiffness s_i = p_i / rho_i^2 (Bender's kappa_i / rho_i). Wall particles are at rest and carry no stiffness of their own:
+//! a wall neighbor j adds m_j s_i grad W_ij (Bender's implementation, SPlisHSPlasH's
+//! `TimeStepDFSPH`, with the paper's walls, whose particles lie on the fluid's lattice and take
+//! the fluid's mass, so that Akinci et al.'s boundary volumes are m / rho0).
+//!
+//! Errors are clamped at zero: a free surface, whose summed density falls short of rho0, is
+//! never pulled back together (no negative pressure), and a dilating flow is left alone.
+//!
+//! The passes of one step, in order: [`factor_pass`]; [`divergence_error_pass`],
+//! [`warm_start_pass`], [`pressure_change_pass`] on the half-step velocity, then
+//! [`divergence_error_pass`] and [`error_sum_pass`], and per sweep [`pressure_change_pass`] and
+//! the same two again; the model's accelerations; then the same with [`density_error_pass`] and
+//! the acceleration.
+
+use crate::cell_grid::{Neighborhood, Neighbors};
+use crate::fluid::Fluid;
+use crate::real::Real;
+use crate::topology::Open;
+use crate::vec3::Vec3;
+use crate::view::{Vec3View, Vec3ViewMut, View, ViewMut};
+
+/// Particles per range of [`error_sum_pass`]: each range is summed in index order by one thread
+/// and the ranges in range order by the host, so a mean error is the same on every backend and
+/// thread count.
+pub const ERROR_RANGE: usize = 256;
+
+#[inline(always)]
+fn vec3<R: Real>(v: [R; 3]) -> Vec3<R> {
+    Vec3::new(v[0], v[1], v[2])
+}
+
+/// Arguments of [`factor_pass`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct FactorArgs<'a, R, N = Neighborhood<'a, Open>> {
+    pub neighborhood: N,
+    pub fluid: Fluid<R>,
+    pub id: View<'a, u32>,
+    pub density: View<'a, R>,
+    /// alpha_i (m^5/kg); 0 for walls.
+    pub factor: ViewMut<'a, R>,
+}
+
+/// The DFSPH factor, Eq. (8): alpha_i = rho_i / (|sum_j m_j grad W_ij|^2 + sum_{j fluid}
+/// |m_j grad W_ij|^2) (m^5/kg), which turns a density error into the stiffness that removes it
+/// where the particle's neighbors hold still. Walls count in the first sum only: they do not
+/// move. A particle with no neighbors gets 0 and is never corrected.
+#[inline(always)]
+pub fn factor_pass<R: Real, N: Neighbors>(i: usize, a: &FactorArgs<R, N>) {
+    let mut factor = R::ZERO;
+    if !a.fluid.is_boundary(a.id.at(i)) {
+        let m = a.fluid.mass;
+        let mut sum = Vec3::zero();
+        let mut squares = R::ZERO;
+        a.neighborhood.for_each_neighbor(i, a.fluid.kernels.h2, |j, r_ij: Vec3<R>, r2| {
+            let grad = a.fluid.kernels.spiky_gradient(r_ij, r2) * m;
+            sum = sum + grad;
+            if !a.fluid.is_boundary(a.id.at(j)) {
+                squares += grad.dot(grad);
+            }
+        });
+        let denominator = sum.dot(sum) + squares;
+        if denominator > R::ZERO {
+            factor = a.density.at(i) / denominator;
+        }
+    }
+    // SAFETY: invocation i owns entry i.
+    unsafe { a.factor.write(i, factor) };
+}
+
+/// dt sum_j m_j (v_i - v_j) . grad W_ij (kg/m^3): the density change over dt that velocity
+/// `v` makes at particle `i`.
+#[inline(always)]
+fn density_change<R: Real, N: Neighbors>(i: usize, neighborhood: &N, fluid: &Fluid<R>, dt: R, v: impl Fn(usize) -> Vec3<R>) -> R {
+    let v_i = v(i);
+    let mut change = R::ZERO;
+    neighborhood.for_each_neighbor(i, fluid.kernels.h2, |j, r_ij: Vec3<R>, r2| {
+        change += (v_i - v(j)).dot(fluid.kernels.spiky_gradient(r_ij, r2));
+    });
+    change * fluid.mass * dt
+}
+
+/// The stiffness s_i = p_i / rho_i^2 (m^5/(kg s^2)) that removes density error `error`
+/// (kg/m^3) over a step that drifts by `dt` on a velocity kicked over `kick_dt` (s).
+#[inline(always)]
+fn stiffness<R: Real>(error: R, factor: R, density: R, dt: R, kick_dt: R) -> R {
+    if factor > R::ZERO {
+        error * factor / (density * dt * kick_dt)
+    } else {
+        R::ZERO
+    }
+}
+
+/// Arguments of [`divergence_error_pass`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct DivergenceErrorArgs<'a, R, N = Neighborhood<'a, Open>> {
+    pub neighborhood: N,
+    pub fluid: Fluid<R>,
+    /// The step's drift (s).
+    pub dt: R,
+    /// The step's kick (s), over which a stiffness acts.
+    pub kick_dt: R,
+    pub id: View<'a, u32>,
+    pub density: View<'a, R>,
+    pub factor: View<'a, R>,
+    /// v_{n-1/2} (m/s), the velocity the divergence solve corrects; walls' at rest.
+    pub velocity_half: Vec3View<'a, R>,
+    /// s_i (m^5/(kg s^2)); 0 for walls.
+    pub stiffness: ViewMut<'a, R>,
+    /// dt D rho_i / Dt where it compresses, else 0 (kg/m^3); 0 for walls.
+    pub error: ViewMut<'a, R>,
+}
+
+/// The divergence error of fluid particle `i`, Eq. (9): the density change over dt that its
+/// velocity field makes, where it compresses, and the stiffness that removes it.
+#[inline(always)]
+pub fn divergence_error_pass<R: Real, N: Neighbors>(i: usize, a: &DivergenceErrorArgs<R, N>) {
+    let (mut error, mut s) = (R::ZERO, R::ZERO);
+    if !a.fluid.is_boundary(a.id.at(i)) {
+        error = density_change(i, &a.neighborhood, &a.fluid, a.dt, |j| vec3(a.velocity_half.at(j))).max(R::ZERO);
+        s = stiffness(error, a.factor.at(i), a.density.at(i), a.dt, a.kick_dt);
+    }
+    // SAFETY: invocation i owns entry i of both outputs.
+    unsafe {
+        a.error.write(i, error);
+        a.stiffness.write(i, s);
+    }
+}
+
+/// Arguments of [`density_error_pass`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct DensityErrorArgs<'a, R, N = Neighborhood<'a, Open>> {
+    pub neighborhood: N,
+    pub fluid: Fluid<R>,
+    /// The step's drift (s).
+    pub dt: R,
+    /// The step's kick (s).
+    pub kick_dt: R,
+    pub id: View<'a, u32>,
+    pub density: View<'a, R>,
+    pub factor: View<'a, R>,
+    /// v_{n-1/2} (m/s).
+    pub velocity_half: Vec3View<'a, R>,
+    /// The step's acceleration so far (m/s^2): v_{n+1/2} = v_{n-1/2} + kick_dt a.
+    pub acceleration: Vec3View<'a, R>,
+    /// s_i (m^5/(kg s^2)); 0 for walls.
+    pub stiffness: ViewMut<'a, R>,
+    /// rho_i + dt D rho_i / Dt - rho0 where above 0, else 0 (kg/m^3); 0 for walls.
+    pub error: ViewMut<'a, R>,
+}
+
+/// The density error of fluid particle `i`, Eq. (5)-(6): by how much the density it would end
+/// the step at exceeds rho0, and the stiffness that removes it.
+#[inline(always)]
+pub fn density_error_pass<R: Real, N: Neighbors>(i: usize, a: &DensityErrorArgs<R, N>) {
+    let (mut error, mut s) = (R::ZERO, R::ZERO);
+    if !a.fluid.is_boundary(a.id.at(i)) {
+        let velocity = |j| vec3(a.velocity_half.at(j)) + vec3(a.acceleration.at(j)) * a.kick_dt;
+        let rho = a.density.at(i);
+        let change = density_change(i, &a.neighborhood, &a.fluid, a.dt, velocity);
+        error = (rho + change - a.fluid.rest_density).max(R::ZERO);
+        s = stiffness(error, a.factor.at(i), rho, a.dt, a.kick_dt);
+    }
+    // SAFETY: invocation i owns entry i of both outputs.
+    unsafe {
+        a.error.write(i, error);
+        a.stiffness.write(i, s);
+    }
+}
+
+/// Arguments of [`pressure_change_pass`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PressureChangeArgs<'a, R, N = Neighborhood<'a, Open>> {
+    pub neighborhood: N,
+    pub fluid: Fluid<R>,
+    pub id: View<'a, u32>,
+    pub stiffness: View<'a, R>,
+    /// Times the pressure acceleration added to `target`: the kick (s) where it is a velocity,
+    /// 1 where it is an acceleration.
+    pub scale: R,
+    /// What the pressure acceleration changes: each fluid particle's entry.
+    pub target: Vec3ViewMut<'a, R>,
+    /// Each fluid particle's stiffness summed over the solve (m^5/(kg s^2)).
+    pub stiffness_sum: ViewMut<'a, R>,
+}
+
+/// Adds `scale` times the pressure acceleration of Eq. (7) in stiffness form,
+/// -sum_j m_j (s_i + s_j) grad W_ij (m/s^2), to fluid particle `i`'s entry of `target`.
+#[inline(always)]
+pub fn pressure_change_pass<R: Real, N: Neighbors>(i: usize, a: &PressureChangeArgs<R, N>) {
+    if a.fluid.is_boundary(a.id.at(i)) {
+        return;
+    }
+    let s_i = a.stiffness.at(i);
+    let mut acceleration = Vec3::zero();
+    a.neighborhood.for_each_neighbor(i, a.fluid.kernels.h2, |j, r_ij: Vec3<R>, r2| {
+        acceleration = acceleration - a.fluid.kernels.spiky_gradient(r_ij, r2) * (s_i + a.stiffness.at(j));
+    });
+    let change = acceleration * (a.fluid.mass * a.scale);
+    let t = vec3(a.target.at(i)) + change;
+    // SAFETY: invocation i owns entry i of both outputs.
+    unsafe {
+        a.target.write(i, [t.x, t.y, t.z]);
+        a.stiffness_sum.write(i, a.stiffness_sum.at(i) + s_i);
+    }
+}
+
+/// Arguments of [`warm_start_pass`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct WarmStartArgs<'a, R> {
+    /// The solve's first error (kg/m^3).
+    pub error: View<'a, R>,
+    /// The last step's stiffness sum of this solve in, 0 out (m^5/(kg s^2)).
+    pub stiffness_sum: ViewMut<'a, R>,
+    /// The stiffness the solve applies first.
+    pub stiffness: ViewMut<'a, R>,
+}
+
+/// The warm start of a solve (Bender and Koschier 2017, Sec. 4.3): particle `i` starts from the
+/// stiffness its last step summed, where it is compressed again; a Jacobi sweep spreads a
+/// correction by about a particle, so without it the hydrostatic pressure of a deep pool would
+/// take as many sweeps as the pool has layers, every step. Where the particle no longer
+/// compresses the old stiffness would push it apart, and no sweep could take that back (errors
+/// are clamped at zero): it starts from nothing. The sum then starts again from what is applied.
+#[inline(always)]
+pub fn warm_start_pass<R: Real>(i: usize, a: &WarmStartArgs<R>) {
+    let s = if a.error.at(i) > R::ZERO { a.stiffness_sum.at(i) } else { R::ZERO };
+    // SAFETY: invocation i owns entry i of both outputs.
+    unsafe {
+        a.stiffness.write(i, s);
+        a.stiffness_sum.write(i, R::ZERO);
+    }
+}
+
+/// Arguments of [`error_sum_pass`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct ErrorSumArgs<'a, R> {
+    pub fluid: Fluid<R>,
+    pub id: View<'a, u32>,
+    pub error: View<'a, R>,
+}
+
+/// Range `r`'s sum of the error and count of fluid particles over particles r ERROR_RANGE ..
+/// min((r + 1) ERROR_RANGE, n), in f64 in index order, written to `out[r]`.
+#[inline(always)]
+pub fn error_sum_pass<R: Real>(r: usize, n: usize, a: &ErrorSumArgs<R>, out: ViewMut<[f64; 2]>) {
+    let start = r * ERROR_RANGE;
+    let end = if start + ERROR_RANGE < n { start + ERROR_RANGE } else { n };
+    let mut sums = [0.0f64; 2];
+    for i in start..end {
+        if !a.fluid.is_boundary(a.id.at(i)) {
+            sums[0] += a.error.at(i).to_f64();
+            sums[1] += 1.0;
+        }
+    }
+    // SAFETY: invocation r owns entry r.
+    unsafe { out.write(r, sums) };
+}
