@@ -26,6 +26,9 @@ use coil_kernels::continuity_molteni2009::{ContinuityArgs, DensityIntegrationArg
 use coil_kernels::counting_sort::Counters;
 use coil_kernels::cross_viscosity::{Cross, Newtonian};
 use coil_kernels::density::DensityArgs;
+use coil_kernels::dfsph_bender2017::{
+    DensityErrorArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, WarmStartArgs,
+};
 use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
 use coil_kernels::fluid_cells::{HoldsFluidArgs, NearFluidArgs};
 use coil_kernels::leapfrog::LeapfrogArgs;
@@ -122,6 +125,10 @@ fn ptx_entry_parameters_match_the_host_argument_layouts() {
         add("system_block_morris_shear", size_of::<MorrisSystemBlockArgs<R, View<R>, Neighborhood<T>>>());
         add("system_product_morris", size_of::<MorrisSystemProductArgs<R, Newtonian<R>, Neighborhood<T>>>());
         add("system_product_morris_shear", size_of::<MorrisSystemProductArgs<R, View<R>, Neighborhood<T>>>());
+        add("dfsph_factor", size_of::<FactorArgs<R, Neighborhood<T>>>());
+        add("divergence_error", size_of::<DivergenceErrorArgs<R, Neighborhood<T>>>());
+        add("density_error", size_of::<DensityErrorArgs<R, Neighborhood<T>>>());
+        add("pressure_change", size_of::<PressureChangeArgs<R, Neighborhood<T>>>());
     }
     fn per_precision<R: Real>(expected: &mut Vec<(String, Vec<usize>)>) {
         per_topology::<R, Open>(expected);
@@ -141,6 +148,8 @@ fn ptx_entry_parameters_match_the_host_argument_layouts() {
         add(format!("cg_direction_{r}"), vec![count, size_of::<CgDirectionArgs<R>>()]);
         add(format!("viscous_acceleration_{r}"), vec![count, size_of::<ViscousAccelerationArgs<R>>()]);
         add(format!("dots_{r}"), vec![count, size_of::<DotArgs<R>>(), size_of::<ViewMut<[f64; 2]>>()]);
+        add(format!("warm_start_{r}"), vec![count, size_of::<WarmStartArgs<R>>()]);
+        add(format!("error_sums_{r}"), vec![count, size_of::<ErrorSumArgs<R>>(), size_of::<ViewMut<[f64; 2]>>()]);
     }
     let view = size_of::<View<u32>>();
     let mut expected = vec![
@@ -484,6 +493,44 @@ fn implicit_viscosity_on_the_gpu_agrees_with_the_cpu() {
     morris.material.viscosity.nu_inf_m2_s = Some(1e-4);
     let operator = ShearThinningMorrisOperator(coil::simulation::model::cross_law::<f64>(&morris.material.viscosity));
     agree(&morris, ImplicitModel { operator, tolerance, max_iterations, picard_iterations: 3 }, "Morris, Cross, Picard");
+}
+
+/// Divergence-free pressure: the factors, both solves' sweeps, their error sums read back every
+/// sweep, and their warm starts (state the sort gathers and the inlet appends at zero) move the
+/// particles as on the CPU; a jet held by its nozzle's tube with implicit viscosity, and a
+/// block falling in a closed box, whose walls make the solves sweep.
+#[test]
+fn divergence_free_pressure_on_the_gpu_agrees_with_the_cpu() {
+    use coil::scene::{DensityEquation, Pressure, ViscositySolver};
+    use coil::simulation::implicit_viscosity::{ImplicitModel, StressOperator};
+    fn agree<M: Model<f64>>(scene: &Scene, model: M, what: &str) {
+        for engine in engines() {
+            let (cpu, on_gpu) = both_with::<f64, _>(engine.open(), scene, model, 300, 2e-4);
+            let sweeps = cpu.run.divergence_solves.iterations + cpu.run.density_solves.iterations;
+            assert!(sweeps > 0, "{what}: the solves never swept: the test would not see them");
+            if matches!(engine, Engine::Emulated) {
+                assert_eq!(on_gpu.run.density_solves, cpu.run.density_solves, "{engine:?}, {what}: density solves");
+                assert_eq!(on_gpu.run.divergence_solves, cpu.run.divergence_solves, "{engine:?}, {what}: divergence solves");
+            }
+            let worst = largest_position_difference(&state_by_id(cpu.particles()), &state_by_id(on_gpu.particles()));
+            println!(
+                "{engine:?}, divergence-free {what}: {sweeps} sweeps, largest position difference after 300 steps {worst:.3e} m"
+            );
+            assert!(worst <= engine.f64_tolerance_m(), "{engine:?}, divergence-free {what}: positions differ by {worst:.3e} m");
+        }
+    }
+    let mut jet = small_jet();
+    jet.simulation.pressure = Pressure::DivergenceFree;
+    jet.material.density_equation = DensityEquation::Summation;
+    jet.material.viscosity.solver = ViscositySolver::Implicit;
+    jet.material.viscosity.velocity_gradient = coil::scene::VelocityGradient::OwnDensity;
+    let operator = StressOperator(Newtonian { nu0: 0.001 });
+    agree(&jet, ImplicitModel { operator, tolerance: 1e-3, max_iterations: 100, picard_iterations: 0 }, "jet");
+    let falling = common::set(
+        &common::box_scene(0.02, [0.3, 0.3, 0.2], [0.12, 0.2, 0.2], ""),
+        &["material.gravity_m_s2=[0.0,-9.81,0.0]", "simulation.pressure=\"divergence_free\""],
+    );
+    agree(&common::scene(&falling), StressModel(Newtonian { nu0: 0.01 }, KernelSum), "block in a box");
 }
 
 /// The jet with density from the continuity equation: its density is state that the sort

@@ -796,6 +796,7 @@ impl Ball {
             density_rate: false,
             shift: false,
             implicit: true,
+            pressure_solve: false,
         };
         let in_ball = |x: [f64; 3]| x.map(|c| c - BALL_CENTRE).iter().map(|c| c * c).sum::<f64>().sqrt() <= 3.5 * LATTICE_SPACING;
         let (mut particles, grid, fluid) = sorted_lattice(20, fields, in_ball, |_| [0.0; 3]);

@@ -106,6 +106,29 @@ fn bad_scenes_exit_2_naming_file_and_field() {
         assert!(stderr.contains(path.to_str().expect("utf-8")) && stderr.contains(field), "case {k}: {stderr}");
         assert!(!stderr.contains("panicked"), "case {k}: {stderr}");
     }
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    let scene = scene.to_str().expect("utf-8");
+    let solved = ["simulation.pressure=divergence_free", "material.density_equation=summation"];
+    let refused = [
+        (&["simulation.pressure=divergence_free", "material.density_equation=continuity"][..], "material.density_equation"),
+        (&["simulation.walls=mirrored"], "simulation.walls"),
+        (&["simulation.divergence_free.relaxation=1.0"], "simulation.divergence_free.relaxation"),
+        (&["simulation.divergence_free.relaxation=0"], "simulation.divergence_free.relaxation"),
+        (&["simulation.divergence_free.min_iterations=101"], "simulation.divergence_free.min_iterations"),
+        (&["simulation.divergence_free.density_tolerance=0.5"], "simulation.divergence_free.density_tolerance"),
+        (&["simulation.divergence_free.cfl_factor=1.5"], "simulation.divergence_free.cfl_factor"),
+    ];
+    for (k, (sets, field)) in refused.iter().enumerate() {
+        let mut args = vec!["check", scene];
+        let all = if k == 0 { sets.to_vec() } else { solved.iter().chain(sets.iter()).copied().collect() };
+        for set in all {
+            args.extend(["--set", set]);
+        }
+        let out = coil(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{sets:?}: {stderr}");
+        assert!(stderr.contains("dam_break.toml") && stderr.contains(field), "{sets:?}: {stderr}");
+    }
     let missing = coil(&["run", dir.join("missing.toml").to_str().expect("utf-8")]);
     assert_eq!(missing.status.code(), Some(2));
     std::fs::remove_dir_all(&dir).ok();

@@ -6,7 +6,6 @@ use crate::simulation::model::Model;
 use crate::simulation::particles::{vec3_view, HostParticles};
 use crate::simulation::RunState;
 use coil_kernels::cross_viscosity::Rheology;
-use coil_kernels::density::pressure;
 use coil_kernels::velocity_gradient::{rate_of_deformation, shear_rate, GradientEstimate};
 use coil_kernels::view::View;
 use coil_kernels::Real;
@@ -65,12 +64,7 @@ impl Frame {
             self.position.push([0, 1, 2].map(|a| p.position[a][i]));
             self.velocity.push([0, 1, 2].map(|a| p.velocity[a][i].to_f64() as f32));
             self.density.push(rho.to_f64() as f32);
-            // A solved pressure is the density solve's last: rho^2 times its stiffness.
-            let p_i = match &p.pressure_solve {
-                Some(solve) => rho * rho * solve.stiffness_sums[1][i],
-                None => pressure(rho, &fluid),
-            };
-            self.pressure.push(p_i.to_f64() as f32);
+            self.pressure.push(p.pressure(i, &fluid).to_f64() as f32);
             self.viscosity.push(run.model.law().viscosity(R::from_f64(d as f64)).to_f64() as f32);
             self.shear_rate.push(d);
             self.id.push(p.id[i]);

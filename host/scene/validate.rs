@@ -383,6 +383,19 @@ impl Check<'_> {
                 format!("must be from 1 to {MAX_IMPLICIT_ITERATIONS}, got {}", d.max_iterations),
             );
         }
+        if d.min_iterations > d.max_iterations {
+            return self.fail(
+                "simulation.divergence_free.min_iterations",
+                format!("must be at most max_iterations ({}), got {}", d.max_iterations, d.min_iterations),
+            );
+        }
+        self.positive("simulation.divergence_free.relaxation", d.relaxation)?;
+        self.within(
+            "simulation.divergence_free.relaxation",
+            d.relaxation,
+            (0.0, 0.75),
+            "dimensionless, above 0 and at most 0.75 (Jacobi sweeps diverge above 0.755)",
+        )?;
         self.positive("simulation.divergence_free.cfl_factor", d.cfl_factor)?;
         self.within("simulation.divergence_free.cfl_factor", d.cfl_factor, (0.0, 1.0), "dimensionless, above 0 and at most 1")?;
         self.positive("simulation.divergence_free.max_time_step_s", d.max_time_step_s)
@@ -599,7 +612,7 @@ fn largest_dt(s: &SimulationSettings, m: &Material, h: f64) -> (f64, Limit) {
         None => {
             let v = &m.viscosity;
             let bound = stability_bound(s, m, h, v.nu0_m2_s.max(v.nu_inf()));
-            let cfl = (s.pressure == Pressure::DivergenceFree).then(|| Cfl {
+            let cfl = (s.pressure == Pressure::DivergenceFree).then_some(Cfl {
                 factor: s.divergence_free.cfl_factor,
                 spacing_m: m.particle_spacing_m,
                 largest_s: s.divergence_free.max_time_step_s,

@@ -54,6 +54,8 @@ pub struct Instability {
     pub stability_bound_s: f64,
     /// The velocity the viscous terms read.
     pub viscous_velocity: ViscousVelocity,
+    /// Whether pressure was solved (divergence-free) rather than Eq. (6)'s.
+    pub pressure_solved: bool,
     /// The first non-finite value a frame would have held (field, particle id, value), where
     /// that is what stopped the run.
     pub non_finite: Option<String>,
@@ -118,6 +120,12 @@ impl fmt::Display for Instability {
             write!(
                 f,
                 "Likely cause: dt = {:.3e} s is above the Eq. (10) bound {:.3e} s; lower simulation.time_step.fixed_s or safety_factor (docs/tradeoff.md gives how far above the bound each viscosity operator was measured to stay stable).",
+                self.dt_s, self.stability_bound_s
+            )
+        } else if self.pressure_solved {
+            write!(
+                f,
+                "dt = {:.3e} s was within the viscous bound {:.3e} s; likely causes: a CFL step too long for the flow (lower simulation.divergence_free.cfl_factor or max_time_step_s), pressure left unsolved between steps (raise simulation.divergence_free.min_iterations or lower its tolerances, or its relaxation), or particles injected into walls.",
                 self.dt_s, self.stability_bound_s
             )
         } else {

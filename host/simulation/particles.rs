@@ -4,6 +4,7 @@ use crate::scene::Pressure;
 use crate::scene::{DensityEquation, Scene};
 use crate::simulation::backend::{ImplicitViews, PressureViews};
 use coil_kernels::dfsph_bender2017::ERROR_RANGE;
+use coil_kernels::fluid::Fluid;
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::viscosity::implicit_weiler2018::DOT_RANGE;
 use coil_kernels::Real;
@@ -268,6 +269,17 @@ impl<R: Real> Particles<R> {
             shift: self.shift.is_some(),
             implicit: self.implicit.is_some(),
             pressure_solve: self.pressure_solve.is_some(),
+        }
+    }
+
+    /// Particle `i`'s pressure (Pa): Eq. (6) of its density, or, where pressure is solved,
+    /// rho^2 times the stiffness the step's two solves applied, which both push over the
+    /// step's kick.
+    pub fn pressure(&self, i: usize, fluid: &Fluid<R>) -> R {
+        let rho = self.density[i];
+        match &self.pressure_solve {
+            Some(solve) => rho * rho * (solve.stiffness_sums[0][i] + solve.stiffness_sums[1][i]),
+            None => coil_kernels::density::pressure(rho, fluid),
         }
     }
 

@@ -279,6 +279,7 @@ impl<R: Real, M: Model<R>> RunState<R, M> {
             dt_s: self.last_dt,
             stability_bound_s: self.stepper.bound.dt().0,
             viscous_velocity: self.viscous_velocity,
+            pressure_solved: self.pressure_solve.is_some(),
             non_finite,
             unconverged_solve: None,
         }

@@ -9,7 +9,7 @@
 
 use super::scene_word;
 use super::snapshot::{snapshots, Snapshot};
-use crate::scene::{PressureGradient, Scene};
+use crate::scene::{Pressure, PressureGradient, Scene};
 use std::f64::consts::PI;
 
 /// An open-topped cubic tank `layers` particles wide and deep, filled to the brim.
@@ -20,6 +20,8 @@ pub struct Tank {
     /// Particles across the depth (and the width).
     pub layers: usize,
     pub gradient: PressureGradient,
+    /// How pressure is found; solved, the walls are the paper's.
+    pub pressure: Pressure,
 }
 
 /// |g| (m/s^2).
@@ -29,7 +31,12 @@ const REST_DENSITY: f64 = 1000.0;
 
 impl Tank {
     pub fn new(layers: usize, gradient: PressureGradient) -> Self {
-        Self { depth_m: 0.1, layers, gradient }
+        Self { depth_m: 0.1, layers, gradient, pressure: Pressure::WeaklyCompressible }
+    }
+
+    /// The same tank with pressure solved for a divergence-free flow.
+    pub fn divergence_free(self) -> Self {
+        Self { pressure: Pressure::DivergenceFree, ..self }
     }
 
     pub fn spacing(&self) -> f64 {
@@ -67,14 +74,18 @@ impl Tank {
         [0.0, -GRAVITY * ramp, 0.0]
     }
 
-    /// The scene: mirrored walls, negative pressure clamped (the free surface is at p = 0), and a
-    /// viscosity at which Eq. (10)'s viscous and acoustic terms are equal, to damp what the
-    /// ramp leaves.
+    /// The scene: mirrored walls (the paper's where pressure is solved), negative pressure
+    /// clamped (the free surface is at p = 0), and a viscosity at which Eq. (10)'s viscous and
+    /// acoustic terms are equal, to damp what the ramp leaves.
     pub fn scene(&self) -> Scene {
         let s = self.spacing();
         let (d, c) = (self.depth_m, self.sound_speed());
         let nu = 0.25 * s * c;
         let gradient = scene_word(self.gradient);
+        let (pressure, walls) = match self.pressure {
+            Pressure::WeaklyCompressible => ("weakly_compressible", "mirrored"),
+            Pressure::DivergenceFree => ("divergence_free", "paper"),
+        };
         let text = format!(
             r#"
 name = "hydrostatic_tank"
@@ -94,7 +105,8 @@ max_m = [{hi:e}, {top:e}, {hi:e}]
 [simulation]
 end_time_s = {end:e}
 precision = "f64"
-walls = "mirrored"
+walls = "{walls}"
+pressure = "{pressure}"
 [[boundary]]
 shape = "box"
 min_m = [0.0, 0.0, 0.0]

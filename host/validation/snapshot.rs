@@ -5,7 +5,6 @@ use crate::scene::setup::{initial_particles, InitialParticles};
 use crate::scene::Scene;
 use crate::simulation::model::{with_precision_and_model, Model, WithModel};
 use crate::simulation::Simulation;
-use coil_kernels::density::pressure;
 use coil_kernels::{Real, Vec3};
 
 /// The fluid particles of a run at one time.
@@ -85,7 +84,7 @@ fn snapshot<R: Real, M: Model<R>>(sim: &Simulation<R, M>) -> Snapshot {
     for i in (0..p.len()).filter(|&i| !sim.run.fluid.is_boundary(p.id[i])) {
         s.position.push([0, 1, 2].map(|a| p.position[a][i]));
         s.velocity.push([0, 1, 2].map(|a| p.velocity[a][i].to_f64()));
-        s.pressure.push(pressure(p.density[i], &sim.run.fluid).to_f64());
+        s.pressure.push(p.pressure(i, &sim.run.fluid).to_f64());
         s.density.push(p.density[i].to_f64());
     }
     s

@@ -10,19 +10,23 @@
 //! Both read one predicted density change over the step, dt sum_j m_j (v_i - v_j) . grad W_ij,
 //! with the spiky gradient of Eq. (7), and correct it with the pressure acceleration
 //! a_i = -sum_j m_j (s_i + s_j) grad W_ij, the symmetric pressure gradient with each particle's
-//! stiffness s_i = p_i / rho_i^2 (Bender's kappa_i / rho_i). Wall particles are at rest and carry no stiffness of their own:
-//! a wall neighbor j adds m_j s_i grad W_ij (Bender's implementation, SPlisHSPlasH's
-//! `TimeStepDFSPH`, with the paper's walls, whose particles lie on the fluid's lattice and take
-//! the fluid's mass, so that Akinci et al.'s boundary volumes are m / rho0).
+//! stiffness s_i = p_i / rho_i^2 (Bender's kappa_i / rho_i). The paper's walls are at rest;
+//! their particles lie on the fluid's lattice and take the fluid's mass, so that Akinci et
+//! al.'s boundary volumes are m / rho0.
 //!
-//! Errors are clamped at zero: a free surface, whose summed density falls short of rho0, is
-//! never pulled back together (no negative pressure), and a dilating flow is left alone.
+//! Wall particles mirror the stiffness of the fluid particle they push on (Akinci et al.
+//! 2012's pressure mirroring), so that the fluid beside a wall reads the pressure its depth
+//! gives rather than twice it.
 //!
-//! The passes of one step, in order: [`factor_pass`]; [`divergence_error_pass`],
-//! [`warm_start_pass`], [`pressure_change_pass`] on the half-step velocity, then
-//! [`divergence_error_pass`] and [`error_sum_pass`], and per sweep [`pressure_change_pass`] and
-//! the same two again; the model's accelerations; then the same with [`density_error_pass`] and
-//! the acceleration.
+//! Pressure pushes and never pulls: each sweep is a projected Jacobi update, relaxed, that keeps
+//! every particle's summed stiffness at or above zero. A free surface, whose summed density
+//! falls short of rho0, is never pulled back together, and a dilating flow is left alone; a
+//! particle that an earlier update over-expanded sheds its stiffness.
+//!
+//! The passes of one step, in order: [`factor_pass`]; on the half-step velocity
+//! [`warm_start_pass`] and [`pressure_change_pass`], then per sweep [`divergence_error_pass`],
+//! [`error_sum_pass`] and [`pressure_change_pass`]; the model's accelerations; then the same
+//! with [`density_error_pass`] on the acceleration.
 
 use crate::cell_grid::{Neighborhood, Neighbors};
 use crate::fluid::Fluid;
@@ -55,23 +59,27 @@ pub struct FactorArgs<'a, R, N = Neighborhood<'a, Open>> {
 
 /// The DFSPH factor, Eq. (8): alpha_i = rho_i / (|sum_j m_j grad W_ij|^2 + sum_{j fluid}
 /// |m_j grad W_ij|^2) (m^5/kg), which turns a density error into the stiffness that removes it
-/// where the particle's neighbors hold still. Walls count in the first sum only: they do not
-/// move. A particle with no neighbors gets 0 and is never corrected.
+/// where the particle's neighbors hold still. Walls count in the first sum only, since they do
+/// not move, and twice in its left factor, since they mirror the particle's stiffness. A
+/// particle with no neighbors gets 0 and is never corrected.
 #[inline(always)]
 pub fn factor_pass<R: Real, N: Neighbors>(i: usize, a: &FactorArgs<R, N>) {
     let mut factor = R::ZERO;
     if !a.fluid.is_boundary(a.id.at(i)) {
         let m = a.fluid.mass;
-        let mut sum = Vec3::zero();
+        let (mut fluid, mut walls) = (Vec3::zero(), Vec3::zero());
         let mut squares = R::ZERO;
         a.neighborhood.for_each_neighbor(i, a.fluid.kernels.h2, |j, r_ij: Vec3<R>, r2| {
             let grad = a.fluid.kernels.spiky_gradient(r_ij, r2) * m;
-            sum = sum + grad;
-            if !a.fluid.is_boundary(a.id.at(j)) {
+            if a.fluid.is_boundary(a.id.at(j)) {
+                walls += grad;
+            } else {
+                fluid += grad;
                 squares += grad.dot(grad);
             }
         });
-        let denominator = sum.dot(sum) + squares;
+        // The walls mirror the particle's own stiffness, so it pushes on them twice.
+        let denominator = (fluid + walls + walls).dot(fluid + walls) + squares;
         if denominator > R::ZERO {
             factor = a.density.at(i) / denominator;
         }
@@ -96,11 +104,22 @@ fn density_change<R: Real, N: Neighbors>(i: usize, neighborhood: &N, fluid: &Flu
 /// (kg/m^3) over a step that drifts by `dt` on a velocity kicked over `kick_dt` (s).
 #[inline(always)]
 fn stiffness<R: Real>(error: R, factor: R, density: R, dt: R, kick_dt: R) -> R {
-    if factor > R::ZERO {
-        error * factor / (density * dt * kick_dt)
-    } else {
-        R::ZERO
-    }
+    error * factor / (density * dt * kick_dt)
+}
+
+/// One projected Jacobi update of a particle whose density would change by `excess` (kg/m^3)
+/// over the step and whose stiffness applied so far is `applied`: the relaxed stiffness change
+/// that removes the excess, held so that the particle's stiffness stays at or above zero
+/// (pressure pushes, never pulls), and the part of the excess that violates the constraint
+/// (kg/m^3): a compression, or an expansion where the particle still pushes.
+///
+/// Projection rather than a clamped error is what lets a warm start work: a particle that the
+/// last step's stiffness now over-expands sheds it instead of keeping it.
+#[inline(always)]
+fn projected<R: Real>(excess: R, factor: R, density: R, dt: R, kick_dt: R, relaxation: R, applied: R) -> (R, R) {
+    let change = (relaxation * stiffness(excess, factor, density, dt, kick_dt)).max(-applied);
+    let violation = if excess > R::ZERO || applied > R::ZERO { excess.abs() } else { R::ZERO };
+    (violation, change)
 }
 
 /// Arguments of [`divergence_error_pass`].
@@ -109,6 +128,8 @@ fn stiffness<R: Real>(error: R, factor: R, density: R, dt: R, kick_dt: R) -> R {
 pub struct DivergenceErrorArgs<'a, R, N = Neighborhood<'a, Open>> {
     pub neighborhood: N,
     pub fluid: Fluid<R>,
+    /// The share of the stiffness that removes the error which a sweep applies (0 to 1).
+    pub relaxation: R,
     /// The step's drift (s).
     pub dt: R,
     /// The step's kick (s), over which a stiffness acts.
@@ -118,6 +139,8 @@ pub struct DivergenceErrorArgs<'a, R, N = Neighborhood<'a, Open>> {
     pub factor: View<'a, R>,
     /// v_{n-1/2} (m/s), the velocity the divergence solve corrects; walls' at rest.
     pub velocity_half: Vec3View<'a, R>,
+    /// The stiffness applied so far in this solve (m^5/(kg s^2)).
+    pub stiffness_sum: View<'a, R>,
     /// s_i (m^5/(kg s^2)); 0 for walls.
     pub stiffness: ViewMut<'a, R>,
     /// dt D rho_i / Dt where it compresses, else 0 (kg/m^3); 0 for walls.
@@ -125,13 +148,15 @@ pub struct DivergenceErrorArgs<'a, R, N = Neighborhood<'a, Open>> {
 }
 
 /// The divergence error of fluid particle `i`, Eq. (9): the density change over dt that its
-/// velocity field makes, where it compresses, and the stiffness that removes it.
+/// velocity field makes, where it compresses, and the stiffness that removes it. A particle
+/// without a factor (walls, fluid whose motion is imposed, a lone droplet) has neither.
 #[inline(always)]
 pub fn divergence_error_pass<R: Real, N: Neighbors>(i: usize, a: &DivergenceErrorArgs<R, N>) {
     let (mut error, mut s) = (R::ZERO, R::ZERO);
-    if !a.fluid.is_boundary(a.id.at(i)) {
-        error = density_change(i, &a.neighborhood, &a.fluid, a.dt, |j| vec3(a.velocity_half.at(j))).max(R::ZERO);
-        s = stiffness(error, a.factor.at(i), a.density.at(i), a.dt, a.kick_dt);
+    let factor = a.factor.at(i);
+    if factor > R::ZERO {
+        let change = density_change(i, &a.neighborhood, &a.fluid, a.dt, |j| vec3(a.velocity_half.at(j)));
+        (error, s) = projected(change, factor, a.density.at(i), a.dt, a.kick_dt, a.relaxation, a.stiffness_sum.at(i));
     }
     // SAFETY: invocation i owns entry i of both outputs.
     unsafe {
@@ -146,6 +171,8 @@ pub fn divergence_error_pass<R: Real, N: Neighbors>(i: usize, a: &DivergenceErro
 pub struct DensityErrorArgs<'a, R, N = Neighborhood<'a, Open>> {
     pub neighborhood: N,
     pub fluid: Fluid<R>,
+    /// The share of the stiffness that removes the error which a sweep applies (0 to 1).
+    pub relaxation: R,
     /// The step's drift (s).
     pub dt: R,
     /// The step's kick (s).
@@ -157,6 +184,8 @@ pub struct DensityErrorArgs<'a, R, N = Neighborhood<'a, Open>> {
     pub velocity_half: Vec3View<'a, R>,
     /// The step's acceleration so far (m/s^2): v_{n+1/2} = v_{n-1/2} + kick_dt a.
     pub acceleration: Vec3View<'a, R>,
+    /// The stiffness applied so far in this solve (m^5/(kg s^2)).
+    pub stiffness_sum: View<'a, R>,
     /// s_i (m^5/(kg s^2)); 0 for walls.
     pub stiffness: ViewMut<'a, R>,
     /// rho_i + dt D rho_i / Dt - rho0 where above 0, else 0 (kg/m^3); 0 for walls.
@@ -164,16 +193,16 @@ pub struct DensityErrorArgs<'a, R, N = Neighborhood<'a, Open>> {
 }
 
 /// The density error of fluid particle `i`, Eq. (5)-(6): by how much the density it would end
-/// the step at exceeds rho0, and the stiffness that removes it.
+/// the step at exceeds rho0, and the stiffness that removes it; none without a factor.
 #[inline(always)]
 pub fn density_error_pass<R: Real, N: Neighbors>(i: usize, a: &DensityErrorArgs<R, N>) {
     let (mut error, mut s) = (R::ZERO, R::ZERO);
-    if !a.fluid.is_boundary(a.id.at(i)) {
+    let factor = a.factor.at(i);
+    if factor > R::ZERO {
         let velocity = |j| vec3(a.velocity_half.at(j)) + vec3(a.acceleration.at(j)) * a.kick_dt;
         let rho = a.density.at(i);
-        let change = density_change(i, &a.neighborhood, &a.fluid, a.dt, velocity);
-        error = (rho + change - a.fluid.rest_density).max(R::ZERO);
-        s = stiffness(error, a.factor.at(i), rho, a.dt, a.kick_dt);
+        let excess = rho + density_change(i, &a.neighborhood, &a.fluid, a.dt, velocity) - a.fluid.rest_density;
+        (error, s) = projected(excess, factor, rho, a.dt, a.kick_dt, a.relaxation, a.stiffness_sum.at(i));
     }
     // SAFETY: invocation i owns entry i of both outputs.
     unsafe {
@@ -200,7 +229,8 @@ pub struct PressureChangeArgs<'a, R, N = Neighborhood<'a, Open>> {
 }
 
 /// Adds `scale` times the pressure acceleration of Eq. (7) in stiffness form,
-/// -sum_j m_j (s_i + s_j) grad W_ij (m/s^2), to fluid particle `i`'s entry of `target`.
+/// -sum_j m_j (s_i + s_j) grad W_ij (m/s^2), with s_j = s_i for a wall, to fluid particle
+/// `i`'s entry of `target`.
 #[inline(always)]
 pub fn pressure_change_pass<R: Real, N: Neighbors>(i: usize, a: &PressureChangeArgs<R, N>) {
     if a.fluid.is_boundary(a.id.at(i)) {
@@ -209,7 +239,8 @@ pub fn pressure_change_pass<R: Real, N: Neighbors>(i: usize, a: &PressureChangeA
     let s_i = a.stiffness.at(i);
     let mut acceleration = Vec3::zero();
     a.neighborhood.for_each_neighbor(i, a.fluid.kernels.h2, |j, r_ij: Vec3<R>, r2| {
-        acceleration = acceleration - a.fluid.kernels.spiky_gradient(r_ij, r2) * (s_i + a.stiffness.at(j));
+        let s_j = if a.fluid.is_boundary(a.id.at(j)) { s_i } else { a.stiffness.at(j) };
+        acceleration = acceleration - a.fluid.kernels.spiky_gradient(r_ij, r2) * (s_i + s_j);
     });
     let change = acceleration * (a.fluid.mass * a.scale);
     let t = vec3(a.target.at(i)) + change;
@@ -224,23 +255,20 @@ pub fn pressure_change_pass<R: Real, N: Neighbors>(i: usize, a: &PressureChangeA
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct WarmStartArgs<'a, R> {
-    /// The solve's first error (kg/m^3).
-    pub error: View<'a, R>,
+    /// The share of the last step's stiffness sum that the solve starts from (0 to 1).
+    pub share: R,
     /// The last step's stiffness sum of this solve in, 0 out (m^5/(kg s^2)).
     pub stiffness_sum: ViewMut<'a, R>,
     /// The stiffness the solve applies first.
     pub stiffness: ViewMut<'a, R>,
 }
 
-/// The warm start of a solve (Bender and Koschier 2017, Sec. 4.3): particle `i` starts from the
-/// stiffness its last step summed, where it is compressed again; a Jacobi sweep spreads a
-/// correction by about a particle, so without it the hydrostatic pressure of a deep pool would
-/// take as many sweeps as the pool has layers, every step. Where the particle no longer
-/// compresses the old stiffness would push it apart, and no sweep could take that back (errors
-/// are clamped at zero): it starts from nothing. The sum then starts again from what is applied.
+/// The warm start of a solve (Bender and Koschier 2017, Sec. 4.3): particle `i` starts from a
+/// share of the stiffness its last step summed, where the last step's pressure is the best
+/// guess at this one's. The sum then starts again from what is applied.
 #[inline(always)]
 pub fn warm_start_pass<R: Real>(i: usize, a: &WarmStartArgs<R>) {
-    let s = if a.error.at(i) > R::ZERO { a.stiffness_sum.at(i) } else { R::ZERO };
+    let s = a.share * a.stiffness_sum.at(i);
     // SAFETY: invocation i owns entry i of both outputs.
     unsafe {
         a.stiffness.write(i, s);
