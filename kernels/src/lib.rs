@@ -20,6 +20,11 @@
 //! [`shifting_sun2017::shifting_pass`] and [`nozzle::nozzle_shift_pass`] (with particle
 //! shifting), [`leapfrog::leapfrog_pass`] and [`shifting_sun2017::shift_pass`] (with particle
 //! shifting); then [`diagnostics`] guards the run.
+//!
+//! With divergence-free pressure the density pass is followed by the factor and the divergence
+//! solve's sweeps, and the accelerations by the density solve's ([`dfsph_bender2017`] lists
+//! them in order); with implicit viscosity the accelerations are followed by its
+//! conjugate-gradient passes ([`viscosity::implicit_weiler2018`]).
 #![no_std]
 #![allow(clippy::neg_cmp_op_on_partial_ord, reason = "`!(a < b)` is how a check here also refuses NaN")]
 #![allow(clippy::needless_range_loop, reason = "a loop over the axes indexes several per-axis arrays at once")]
