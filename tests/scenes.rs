@@ -436,6 +436,14 @@ fn check_reports_counts_the_equation_10_bound_and_a_calibrated_estimate() {
     let r = check(&implicit, "round_jet.toml", None, std::time::Duration::ZERO).expect("valid");
     assert!(r.limit == Limit::Acoustic && (r.dt_s - 4e-5).abs() < 1e-18, "{r}");
     assert!(r.to_string().contains("viscous: none (solved implicitly)"), "{r}");
+    // Pressure solved too: the CFL step at the fastest speed the jet can reach,
+    // 0.2 s / |v| = 0.2 * 0.004 / 2.43 m/s.
+    let mut solved = implicit.clone();
+    solved.simulation.pressure = coil::scene::Pressure::DivergenceFree;
+    solved.material.density_equation = coil::scene::DensityEquation::Summation;
+    let r = check(&solved, "round_jet.toml", None, std::time::Duration::ZERO).expect("valid");
+    assert!(r.limit == Limit::Cfl && (r.dt_s - 0.2 * 0.004 / fastest).abs() < 1e-15, "{r}");
+    assert!(r.to_string().contains("Eq. (10) bound     none: acoustic: none (pressure solved)"), "{r}");
     // A channel driven along its periodic axis has no height to fall through.
     let channel = Scene::parse(
         "name = \"channel\"\n[material]\nparticle_spacing_m = 0.001\ngravity_m_s2 = [1e-3, 0.0, 0.0]\n\

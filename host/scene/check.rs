@@ -2,7 +2,7 @@
 //! limiting term, memory, and a wall-time estimate from a short calibration run on this machine.
 
 use crate::scene::setup::{fastest_start_speed, initial_particles, InitialParticles};
-use crate::scene::{Boundary, Domain, FluidBlock, Precision, Scene, SceneError};
+use crate::scene::{Boundary, Domain, FluidBlock, Precision, Pressure, Scene, SceneError};
 use crate::simulation::backend::Backend as _;
 use crate::simulation::inlet::Inlet;
 use crate::simulation::model::{with_precision_and_model, Model, WithModel};
@@ -87,12 +87,14 @@ impl fmt::Display for Report {
         } else {
             "viscous: none (solved implicitly)".to_string()
         };
-        writeln!(
-            f,
-            "Eq. (10) bound     {:.3e} s: acoustic 0.1 h/c = {:.3e} s, {viscous}",
-            self.bound.dt().0,
-            self.bound.acoustic_s,
-        )?;
+        let acoustic = if self.bound.acoustic_s.is_finite() {
+            format!("acoustic 0.1 h/c = {:.3e} s", self.bound.acoustic_s)
+        } else {
+            "acoustic: none (pressure solved)".to_string()
+        };
+        let bound = self.bound.dt().0;
+        let bound = if bound.is_finite() { format!("{bound:.3e} s") } else { "none".to_string() };
+        writeln!(f, "Eq. (10) bound     {bound}: {acoustic}, {viscous}")?;
         writeln!(f, "dt                 {:.3e} s, limited by the {}", self.dt_s, self.limit)?;
         writeln!(f, "steps              {:.0}", self.steps)?;
         writeln!(f, "memory             {mib:.1} MiB of particle and grid arrays ({:?})", self.precision)?;
@@ -260,7 +262,13 @@ pub fn check(scene: &Scene, file: &str, precision: Option<Precision>, calibratio
         scene.material.sound_speed_m_s,
         v.bounding_viscosity(v.nu0_m2_s.max(v.nu_inf())),
     );
-    let (dt, limit) = TimeStepper { bound, ..plan.stepper }.next(0.0);
+    // Solved pressure has no acoustic term, and its CFL step is estimated at the fastest speed
+    // the run can reach.
+    let divergence_free = scene.simulation.pressure == Pressure::DivergenceFree;
+    let bound = if divergence_free { bound.incompressible() } else { bound };
+    let speed_bound = speed_bound(scene, &initial);
+    let fastest = if divergence_free { speed_bound.unwrap_or(0.0) } else { 0.0 };
+    let (dt, limit) = TimeStepper { bound, ..plan.stepper }.next(fastest);
     let end = scene.simulation.end_time_s;
     let steps = (end / dt).ceil();
     // Particle-steps over the run, the fluid count integrated over time.
@@ -280,7 +288,6 @@ pub fn check(scene: &Scene, file: &str, precision: Option<Precision>, calibratio
     } else {
         (scene, &initial)
     };
-    let speed_bound = speed_bound(scene, &initial);
     let work = Calibrate { scene: calibrated_scene, initial: calibrated_initial, wall: calibration };
     let (seconds_per_particle_step, calibration_steps) = with_precision_and_model(precision, calibrated_scene, work);
     Ok(Report {

@@ -125,8 +125,8 @@ impl fmt::Display for Instability {
         } else if self.pressure_solved {
             write!(
                 f,
-                "dt = {:.3e} s was within the viscous bound {:.3e} s; likely causes: a CFL step too long for the flow (lower simulation.divergence_free.cfl_factor or max_time_step_s), pressure left unsolved between steps (raise simulation.divergence_free.min_iterations or lower its tolerances, or its relaxation), or particles injected into walls.",
-                self.dt_s, self.stability_bound_s
+                "dt = {:.3e} s was within the bound of the terms not solved; likely causes: particle shifting, which moves particles after the pressure solve (set simulation.particle_shifting = 0: with it a jet 3 D above its plate blew up), a CFL step too long for the flow (lower simulation.divergence_free.cfl_factor or max_time_step_s), pressure left unsolved between steps (raise simulation.divergence_free.min_iterations or lower its tolerances, or its relaxation), or particles injected into walls.",
+                self.dt_s
             )
         } else {
             write!(

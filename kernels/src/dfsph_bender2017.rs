@@ -89,16 +89,30 @@ pub fn factor_pass<R: Real, N: Neighbors>(i: usize, a: &FactorArgs<R, N>) {
 }
 
 /// dt sum_j m_j (v_i - v_j) . grad W_ij (kg/m^3): the density change over dt that velocity
-/// `v` makes at particle `i`.
+/// `v` makes at particle `i`, and how many neighbors it has besides itself.
 #[inline(always)]
-fn density_change<R: Real, N: Neighbors>(i: usize, neighborhood: &N, fluid: &Fluid<R>, dt: R, v: impl Fn(usize) -> Vec3<R>) -> R {
+fn density_change<R: Real, N: Neighbors>(
+    i: usize,
+    neighborhood: &N,
+    fluid: &Fluid<R>,
+    dt: R,
+    v: impl Fn(usize) -> Vec3<R>,
+) -> (R, u32) {
     let v_i = v(i);
     let mut change = R::ZERO;
+    let mut neighbors = 0;
     neighborhood.for_each_neighbor(i, fluid.kernels.h2, |j, r_ij: Vec3<R>, r2| {
         change += (v_i - v(j)).dot(fluid.kernels.spiky_gradient(r_ij, r2));
+        neighbors += (r2 > R::ZERO) as u32;
     });
-    change * fluid.mass * dt
+    (change * fluid.mass * dt, neighbors)
 }
+
+/// Below this many neighbors (of 32 inside the fluid at h = 2 spacings) a particle takes no
+/// part in the divergence solve, as in SPlisHSPlasH: at a thin thread's surface the predicted
+/// divergence of a few neighbors is noise that the solve would turn into pressure, and a
+/// falling thread 12 D long blew apart.
+pub const DIVERGENCE_NEIGHBORS: u32 = 20;
 
 /// The stiffness s_i = p_i / rho_i^2 (m^5/(kg s^2)) that removes density error `error`
 /// (kg/m^3) over a step that drifts by `dt` on a velocity kicked over `kick_dt` (s).
@@ -155,8 +169,13 @@ pub fn divergence_error_pass<R: Real, N: Neighbors>(i: usize, a: &DivergenceErro
     let (mut error, mut s) = (R::ZERO, R::ZERO);
     let factor = a.factor.at(i);
     if factor > R::ZERO {
-        let change = density_change(i, &a.neighborhood, &a.fluid, a.dt, |j| vec3(a.velocity_half.at(j)));
-        (error, s) = projected(change, factor, a.density.at(i), a.dt, a.kick_dt, a.relaxation, a.stiffness_sum.at(i));
+        let (change, neighbors) = density_change(i, &a.neighborhood, &a.fluid, a.dt, |j| vec3(a.velocity_half.at(j)));
+        let applied = a.stiffness_sum.at(i);
+        (error, s) = if neighbors < DIVERGENCE_NEIGHBORS {
+            (R::ZERO, -applied)
+        } else {
+            projected(change, factor, a.density.at(i), a.dt, a.kick_dt, a.relaxation, applied)
+        };
     }
     // SAFETY: invocation i owns entry i of both outputs.
     unsafe {
@@ -201,7 +220,7 @@ pub fn density_error_pass<R: Real, N: Neighbors>(i: usize, a: &DensityErrorArgs<
     if factor > R::ZERO {
         let velocity = |j| vec3(a.velocity_half.at(j)) + vec3(a.acceleration.at(j)) * a.kick_dt;
         let rho = a.density.at(i);
-        let excess = rho + density_change(i, &a.neighborhood, &a.fluid, a.dt, velocity) - a.fluid.rest_density;
+        let excess = rho + density_change(i, &a.neighborhood, &a.fluid, a.dt, velocity).0 - a.fluid.rest_density;
         (error, s) = projected(excess, factor, rho, a.dt, a.kick_dt, a.relaxation, a.stiffness_sum.at(i));
     }
     // SAFETY: invocation i owns entry i of both outputs.
