@@ -155,15 +155,17 @@ pub struct DivergenceErrorArgs<'a, R, N = Neighborhood<'a, Open>> {
     pub velocity_half: Vec3View<'a, R>,
     /// The stiffness applied so far in this solve (m^5/(kg s^2)).
     pub stiffness_sum: View<'a, R>,
-    /// s_i (m^5/(kg s^2)); 0 for walls.
+    /// The change of s_i this sweep applies (m^5/(kg s^2)); 0 for walls.
     pub stiffness: ViewMut<'a, R>,
-    /// dt D rho_i / Dt where it compresses, else 0 (kg/m^3); 0 for walls.
+    /// The part of dt D rho_i / Dt that violates the constraint (kg/m^3): a compression, or an
+    /// expansion where the particle still pushes; 0 for walls.
     pub error: ViewMut<'a, R>,
 }
 
 /// The divergence error of fluid particle `i`, Eq. (9): the density change over dt that its
-/// velocity field makes, where it compresses, and the stiffness that removes it. A particle
-/// without a factor (walls, fluid whose motion is imposed, a lone droplet) has neither.
+/// velocity field makes, and the stiffness change that removes it. A particle without a factor
+/// (walls, fluid whose motion is imposed, a lone droplet) has neither; one with fewer than
+/// [`DIVERGENCE_NEIGHBORS`] neighbors sheds its stiffness and has no error.
 #[inline(always)]
 pub fn divergence_error_pass<R: Real, N: Neighbors>(i: usize, a: &DivergenceErrorArgs<R, N>) {
     let (mut error, mut s) = (R::ZERO, R::ZERO);
@@ -205,9 +207,10 @@ pub struct DensityErrorArgs<'a, R, N = Neighborhood<'a, Open>> {
     pub acceleration: Vec3View<'a, R>,
     /// The stiffness applied so far in this solve (m^5/(kg s^2)).
     pub stiffness_sum: View<'a, R>,
-    /// s_i (m^5/(kg s^2)); 0 for walls.
+    /// The change of s_i this sweep applies (m^5/(kg s^2)); 0 for walls.
     pub stiffness: ViewMut<'a, R>,
-    /// rho_i + dt D rho_i / Dt - rho0 where above 0, else 0 (kg/m^3); 0 for walls.
+    /// The part of rho_i + dt D rho_i / Dt - rho0 that violates the constraint (kg/m^3): an
+    /// excess, or a deficit where the particle still pushes; 0 for walls.
     pub error: ViewMut<'a, R>,
 }
 
