@@ -476,7 +476,7 @@ pub struct DivergenceFree {
     /// The share of each Jacobi update that a sweep applies (dimensionless, above 0, at most
     /// 0.75). On a particle lattice at h = 2 spacings the update overshoots the shortest
     /// pressure wave by a factor 2.65, so a full update (1) diverges and anything above
-    /// 2 / 2.65 = 0.755 does; 0.5 damps that wave as fast as any and leaves room for the
+    /// 2 / 2.65 = 0.755 does; 0.5 damps that wave to a third a sweep and leaves room for the
     /// irregular neighborhoods of walls and free surfaces.
     #[serde(default = "default_relaxation")]
     pub relaxation: f64,
