@@ -117,9 +117,10 @@ impl<R: Real, N: Neighbors> PressureSolve<'_, R, N> {
         self.sweeps(backend, self.settings.density_tolerance, error, self.acceleration, R::ONE, x.density_sum)
     }
 
-    /// Jacobi sweeps, warm started from `stiffness_sum`: each adds `scale` times the pressure
-    /// acceleration of the last error's stiffness to `target`, until the fluid's mean error
-    /// over rho0 is within `tolerance`; `stiffness_sum` ends with what was applied.
+    /// Jacobi sweeps, warm started from a share of `stiffness_sum`: each adds `scale` times the
+    /// pressure acceleration of the stiffness change the last error pass found to `target`, at
+    /// least `min_iterations` times and until the fluid's mean error over rho0 is within
+    /// `tolerance`; `stiffness_sum` ends with what was applied.
     fn sweeps<T: Topology, P: Passes<R, T, N>>(
         &self,
         backend: &mut P,
