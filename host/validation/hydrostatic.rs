@@ -82,9 +82,10 @@ impl Tank {
         let (d, c) = (self.depth_m, self.sound_speed());
         let nu = 0.25 * s * c;
         let gradient = scene_word(self.gradient);
-        let (pressure, walls) = match self.pressure {
-            Pressure::WeaklyCompressible => ("weakly_compressible", "mirrored"),
-            Pressure::DivergenceFree => ("divergence_free", "paper"),
+        let pressure = scene_word(self.pressure);
+        let walls = match self.pressure {
+            Pressure::WeaklyCompressible => "mirrored",
+            Pressure::DivergenceFree => "paper",
         };
         let text = format!(
             r#"
