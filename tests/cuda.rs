@@ -528,7 +528,11 @@ fn divergence_free_pressure_on_the_gpu_agrees_with_the_cpu() {
     agree(&jet, ImplicitModel { operator, tolerance: 1e-3, max_iterations: 100, picard_iterations: 0 }, "jet");
     let falling = common::set(
         &common::box_scene(0.02, [0.3, 0.3, 0.2], [0.12, 0.2, 0.2], ""),
-        &["material.gravity_m_s2=[0.0,-9.81,0.0]", "simulation.pressure=\"divergence_free\""],
+        &[
+            "material.gravity_m_s2=[0.0,-9.81,0.0]",
+            "simulation.pressure=\"divergence_free\"",
+            "material.density_kernel=\"spiky\"",
+        ],
     );
     agree(&common::scene(&falling), StressModel(Newtonian { nu0: 0.01 }, KernelSum), "block in a box");
 }

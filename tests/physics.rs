@@ -212,7 +212,7 @@ fn results_do_not_depend_on_the_thread_count_or_the_calling_thread() {
 fn divergence_free_results_do_not_depend_on_the_thread_count() {
     let text = common::set(
         &common::box_scene(0.02, [0.3, 0.3, 0.2], [0.12, 0.2, 0.2], ""),
-        &[GRAVITY, "simulation.pressure=\"divergence_free\""],
+        &[GRAVITY, "simulation.pressure=\"divergence_free\"", "material.density_kernel=\"spiky\""],
     );
     same_results_on_any_thread_count(&text, LaplacianModel(Newtonian { nu0: 0.01 }));
 }
@@ -229,6 +229,7 @@ fn a_water_dam_break_stays_in_its_box_with_divergence_free_pressure() {
         "material.viscosity.nu_inf_m2_s=1e-6",
         "material.viscosity.cross_k_s=0",
         "simulation.pressure=\"divergence_free\"",
+        "material.density_kernel=\"spiky\"",
     ];
     let scene = common::scene(&common::set(&text, &water));
     let initial = initial_particles(&scene, "test.toml").expect("particles");
@@ -267,6 +268,7 @@ fn a_long_falling_jet_holds_together_with_divergence_free_pressure() {
     let sets = [
         "simulation.pressure=divergence_free",
         "material.density_equation=summation",
+        "material.density_kernel=spiky",
         "material.viscosity.solver=implicit",
         "material.viscosity.velocity_gradient=own_density",
         "simulation.particle_shifting=0",

@@ -108,10 +108,11 @@ fn bad_scenes_exit_2_naming_file_and_field() {
     }
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
     let scene = scene.to_str().expect("utf-8");
-    let solved = ["simulation.pressure=divergence_free", "material.density_equation=summation"];
+    let solved = ["simulation.pressure=divergence_free", "material.density_equation=summation", "material.density_kernel=spiky"];
     let refused = [
         (&["simulation.pressure=divergence_free", "material.density_equation=continuity"][..], "material.density_equation"),
         (&["simulation.walls=mirrored"], "simulation.walls"),
+        (&["material.density_kernel=poly6"], "material.density_kernel"),
         (&["simulation.divergence_free.relaxation=1.0"], "simulation.divergence_free.relaxation"),
         (&["simulation.divergence_free.relaxation=0"], "simulation.divergence_free.relaxation"),
         (&["simulation.divergence_free.min_iterations=101"], "simulation.divergence_free.min_iterations"),
@@ -441,6 +442,7 @@ fn check_reports_counts_the_equation_10_bound_and_a_calibrated_estimate() {
     let mut solved = implicit.clone();
     solved.simulation.pressure = coil::scene::Pressure::DivergenceFree;
     solved.material.density_equation = coil::scene::DensityEquation::Summation;
+    solved.material.density_kernel = coil::scene::DensityKernelKind::Spiky;
     let r = check(&solved, "round_jet.toml", None, std::time::Duration::ZERO).expect("valid");
     assert!(r.limit == Limit::Cfl && (r.dt_s - 0.2 * 0.004 / fastest).abs() < 1e-15, "{r}");
     assert!(r.to_string().contains("Eq. (10) bound     none: acoustic: none (pressure solved)"), "{r}");

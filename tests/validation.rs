@@ -4,6 +4,7 @@
 mod common;
 
 use coil::scene::{PressureGradient, ViscosityOperator, Walls};
+use coil::validation::divergence_free::taylor_green_divergence_free;
 use coil::validation::hydrostatic::{self, Tank};
 use coil::validation::poiseuille::{cross_steady_velocity, relative_max_error, simulate, startup_velocity, Channel, CrossLaw};
 use coil::validation::{
@@ -131,13 +132,13 @@ fn the_hydrostatic_tank_holds_rho0_g_depth_and_eq7_doubles_it() {
     assert!((full.pressure_ratio - 1.0).abs() < 0.05, "{}", full.pressure_ratio);
 }
 
-/// The same tank with divergence-free pressure (the paper's walls): its solved pressure is
-/// rho0 g depth within 3 % on the whole (the slope through the layers, measured 1.019) and
-/// within 7 % of rho0 g D layer by layer (measured 0.057), and the fluid is at rest (measured
-/// 0.012 of sqrt(g D)). Layer by layer the pressure alternates about rho0 g depth by some 5 %
-/// of rho0 g D: a mode of the symmetric pressure gradient that pushes on nothing, which no
-/// solver setting changed (tolerances down to 1e-5, 5 sweeps, relaxation 0.7, the spiky
-/// density).
+/// The same tank with divergence-free pressure (the paper's walls, the spiky density kernel):
+/// its solved pressure is rho0 g depth within 4 % on the whole (the slope through the layers,
+/// measured 1.032) and within 10 % of rho0 g D layer by layer (measured 0.091), and the fluid
+/// is at rest (measured 0.0066 of sqrt(g D)). Layer by layer the pressure alternates about
+/// rho0 g depth: a mode of the symmetric pressure gradient that pushes on nothing, which no
+/// solver setting changed (tolerances down to 1e-5, 5 sweeps, relaxation 0.7). With the poly6
+/// density it alternated less (0.057, slope 1.019), but a closed box at rest blew up.
 #[test]
 fn the_divergence_free_tank_holds_rho0_g_depth() {
     let tank = hydrostatic::simulate(&Tank::new(10, PressureGradient::Full).divergence_free()).expect("stable");
@@ -146,8 +147,8 @@ fn the_divergence_free_tank_holds_rho0_g_depth() {
         tank.pressure_error, tank.pressure_ratio, tank.residual_speed
     );
     eprintln!("divergence free: {figures}");
-    assert!(tank.pressure_error < 0.07, "{figures}");
-    assert!((tank.pressure_ratio - 1.0).abs() < 0.03, "{figures}");
+    assert!(tank.pressure_error < 0.1, "{figures}");
+    assert!((tank.pressure_ratio - 1.0).abs() < 0.04, "{figures}");
     assert!(tank.residual_speed < 0.02, "{figures}");
 }
 
@@ -170,6 +171,17 @@ fn the_taylor_green_vortex_decays_at_the_exact_rate() {
 /// centroid would read 0.3 D), a pile alone reads nothing, and so does an empty slab. The
 /// nozzle and the plate are placed off the origin, so that the slab and the distance must be
 /// taken from them.
+/// With pressure solved and viscosity implicit (the paper's operator at the own density) the
+/// vortex still decays at the exact rate within the suite's 5 %, at 40 across where the paper's
+/// operator binds (measured 0.024; explicit and weakly compressible 0.015). Its dt is the CFL
+/// step capped at 1/50 of an e-folding time, where backward Euler's lag is about 1 %.
+#[test]
+fn the_taylor_green_vortex_decays_at_the_exact_rate_with_pressure_solved() {
+    let r = taylor_green_divergence_free(40).expect("stable");
+    eprintln!("{}: {:.4}", r.measure, r.error);
+    assert!(r.passed(), "{} {:.4}", r.measure, r.error);
+}
+
 #[test]
 fn the_jet_axis_offset_reads_where_the_fluid_falls_just_above_the_plate() {
     use coil::validation::jet_axis::JetAxis;

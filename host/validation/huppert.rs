@@ -4,7 +4,7 @@
 
 use super::scene_word;
 use super::snapshot::{snapshots_from, Snapshot};
-use crate::scene::{Scene, ViscosityOperator, ViscositySolver};
+use crate::scene::{DensityKernelKind, Pressure, Scene, ViscosityOperator, ViscositySolver, Walls};
 
 /// |g| (m/s^2).
 const GRAVITY: f64 = 9.81;
@@ -33,6 +33,13 @@ pub struct Release {
     /// With a solver: the paper's operator with the own-density gradient, integrated by it, in
     /// place of `operator` as given.
     pub own_density: Option<ViscositySolver>,
+    /// The plate: mirrored (no slip on its surface), or the paper's, which a solved pressure
+    /// needs.
+    pub walls: Walls,
+    /// Eq. (6)'s pressure, or pressure solved at the CFL time step.
+    pub pressure: Pressure,
+    /// W of Eq. (5).
+    pub density_kernel: DensityKernelKind,
 }
 
 impl Release {
@@ -51,6 +58,9 @@ impl Release {
             sound_speed_m_s: 20.0,
             final_spread: 2.0,
             own_density: None,
+            walls: Walls::Mirrored,
+            pressure: Pressure::WeaklyCompressible,
+            density_kernel: DensityKernelKind::Poly6,
         }
     }
 
@@ -76,7 +86,7 @@ impl Release {
         speed * volume_m3 / (std::f64::consts::PI * radius_m * radius_m) / self.nu_m2_s
     }
 
-    /// The scene: the cylinder standing at rest on a mirrored (no-slip) plate at y = 0 that
+    /// The scene: the cylinder standing at rest on a plate at y = 0 (mirrored, no slip) that
     /// reaches 3 R0 from the axis, with the full pressure gradient (the paper's half gradient
     /// would only double the pressure that holds the fluid up) and clamped negative pressure at
     /// the free surface.
@@ -91,6 +101,7 @@ rest_density_kg_m3 = 1000.0
 sound_speed_m_s = {c:e}
 clamp_negative_pressure = true
 pressure_gradient = "full"
+density_kernel = "{density_kernel}"
 particle_spacing_m = {s:e}
 support_radius_factor = 2.0
 gravity_m_s2 = [0.0, {g:e}, 0.0]
@@ -105,7 +116,8 @@ max_m = [{reach:e}, {top:e}, {reach:e}]
 [simulation]
 end_time_s = {end_time_s:e}
 precision = "f64"
-walls = "mirrored"
+walls = "{walls}"
+pressure = "{pressure}"
 [[boundary]]
 shape = "plate"
 height_m = 0.0
@@ -126,6 +138,9 @@ height_m = {h:e}
             lo = -reach,
             floor = -4.0 * s,
             top = 2.0 * h,
+            walls = scene_word(self.walls),
+            pressure = scene_word(self.pressure),
+            density_kernel = scene_word(self.density_kernel),
         );
         Scene::parse(&text, "huppert (generated)").expect("the generated release is a valid scene")
     }

@@ -9,7 +9,7 @@
 
 use super::scene_word;
 use super::snapshot::{snapshots, Snapshot};
-use crate::scene::{Pressure, PressureGradient, Scene};
+use crate::scene::{DensityKernelKind, Pressure, PressureGradient, Scene, Walls};
 use std::f64::consts::PI;
 
 /// An open-topped cubic tank `layers` particles wide and deep, filled to the brim.
@@ -20,7 +20,8 @@ pub struct Tank {
     /// Particles across the depth (and the width).
     pub layers: usize,
     pub gradient: PressureGradient,
-    /// How pressure is found; solved, the walls are the paper's.
+    /// How pressure is found; solved, the walls are the paper's and the density kernel the
+    /// spiky one, as a solved pressure needs.
     pub pressure: Pressure,
 }
 
@@ -83,10 +84,11 @@ impl Tank {
         let nu = 0.25 * s * c;
         let gradient = scene_word(self.gradient);
         let pressure = scene_word(self.pressure);
-        let walls = match self.pressure {
-            Pressure::WeaklyCompressible => "mirrored",
-            Pressure::DivergenceFree => "paper",
+        let (walls, density_kernel) = match self.pressure {
+            Pressure::WeaklyCompressible => (Walls::Mirrored, DensityKernelKind::Poly6),
+            Pressure::DivergenceFree => (Walls::Paper, DensityKernelKind::Spiky),
         };
+        let (walls, density_kernel) = (scene_word(walls), scene_word(density_kernel));
         let text = format!(
             r#"
 name = "hydrostatic_tank"
@@ -95,6 +97,7 @@ rest_density_kg_m3 = {rho0:e}
 sound_speed_m_s = {c:e}
 clamp_negative_pressure = true
 pressure_gradient = "{gradient}"
+density_kernel = "{density_kernel}"
 particle_spacing_m = {s:e}
 gravity_m_s2 = [0.0, {g:e}, 0.0]
 [material.viscosity]

@@ -1,5 +1,6 @@
 //! Validation against references nobody on the team produced: `coil validate` and its tests.
 
+pub mod divergence_free;
 pub mod huppert;
 pub mod hydrostatic;
 pub mod jet;

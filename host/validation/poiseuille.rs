@@ -6,7 +6,7 @@
 use super::scene_word;
 use super::snapshot::snapshots;
 use crate::scene::{
-    DensityKernelKind, Precision, Scene, VelocityGradient, ViscosityOperator, ViscositySolver, ViscousVelocity, Walls,
+    DensityKernelKind, Precision, Pressure, Scene, VelocityGradient, ViscosityOperator, ViscositySolver, ViscousVelocity, Walls,
 };
 use std::f64::consts::PI;
 
@@ -44,6 +44,8 @@ pub struct Channel {
     pub fixed_dt_s: Option<f64>,
     /// The implicit solve's relative residual.
     pub implicit_tolerance: f64,
+    /// Eq. (6)'s pressure, or pressure solved (at the CFL time step, on the paper's walls).
+    pub pressure: Pressure,
 }
 
 /// The Cross model, Eq. (3), by its constants.
@@ -83,6 +85,7 @@ impl Channel {
             solver: ViscositySolver::Explicit,
             fixed_dt_s: None,
             implicit_tolerance: 1e-3,
+            pressure: Pressure::WeaklyCompressible,
         }
     }
 
@@ -110,6 +113,7 @@ impl Channel {
         let (operator, precision, walls) = (scene_word(self.operator), scene_word(self.precision), scene_word(self.walls));
         let (density_kernel, viscous_velocity) = (scene_word(self.density_kernel), scene_word(self.viscous_velocity));
         let (velocity_gradient, solver) = (scene_word(self.velocity_gradient), scene_word(self.solver));
+        let pressure = scene_word(self.pressure);
         let fixed = self.fixed_dt_s.map(|dt| format!(", fixed_s = {dt:e}")).unwrap_or_default();
         let cross = self
             .cross
@@ -141,6 +145,7 @@ periodic = [true, false, true]
 end_time_s = {end_time_s:e}
 precision = "{precision}"
 walls = "{walls}"
+pressure = "{pressure}"
 time_step = {{ safety_factor = {sf:e}, allow_above_stability_bound = {above}, viscous_velocity = "{viscous_velocity}"{fixed} }}
 [[boundary]]
 shape = "box"
