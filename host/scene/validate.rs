@@ -379,7 +379,7 @@ impl Check<'_> {
         if m.density_kernel != DensityKernelKind::Spiky {
             return self.fail(
                 "simulation.pressure",
-                "\"divergence_free\" predicts each density change with the spiky gradient, so the density it corrects must be summed with the spiky kernel (with poly6 a closed box of fluid at rest blew up within 300 steps); set material.density_kernel = \"spiky\"".into(),
+                "\"divergence_free\" predicts each density change with the spiky gradient, so the density it corrects must be summed with the spiky kernel (with poly6 a closed channel of fluid at rest blew up within 300 steps); set material.density_kernel = \"spiky\"".into(),
             );
         }
         let d = &s.divergence_free;
