@@ -3,7 +3,7 @@
 
 mod common;
 
-use coil::scene::{PressureGradient, ViscosityOperator, Walls};
+use coil::scene::{DensityKernelKind, Pressure, PressureGradient, VelocityGradient, ViscosityOperator, ViscositySolver, Walls};
 use coil::validation::divergence_free::taylor_green_divergence_free;
 use coil::validation::hydrostatic::{self, Tank};
 use coil::validation::poiseuille::{cross_steady_velocity, relative_max_error, simulate, startup_velocity, Channel, CrossLaw};
@@ -159,11 +159,10 @@ fn the_divergence_free_tank_holds_rho0_g_depth() {
 /// up within 300 steps.
 #[test]
 fn a_closed_channel_at_rest_stays_at_rest_with_pressure_solved() {
-    use coil::scene::{DensityKernelKind, Pressure, ViscositySolver};
     let channel = Channel {
         walls: Walls::Paper,
         density_kernel: DensityKernelKind::Spiky,
-        velocity_gradient: coil::scene::VelocityGradient::OwnDensity,
+        velocity_gradient: VelocityGradient::OwnDensity,
         solver: ViscositySolver::Implicit,
         pressure: Pressure::DivergenceFree,
         force_m_s2: 0.0,
@@ -187,12 +186,6 @@ fn the_taylor_green_vortex_decays_at_the_exact_rate() {
     assert!(fine.passed() && fine.error < 0.5 * coarse.error, "{} then {}", coarse.error, fine.error);
 }
 
-/// The jet's axis offset reads where the fluid falls through the slab D/2 to 3D/2 above the
-/// plate, from the nozzle's axis: a rope displaced by 0.6 D there reads 0.6 D whatever lies
-/// above or below it and whatever pile at rest or rising fluid surrounds it (the fluid's
-/// centroid would read 0.3 D), a pile alone reads nothing, and so does an empty slab. The
-/// nozzle and the plate are placed off the origin, so that the slab and the distance must be
-/// taken from them.
 /// With pressure solved and viscosity implicit (the paper's operator at the own density) the
 /// vortex still decays at the exact rate within the suite's 5 %, at 40 across where the paper's
 /// operator binds (measured 0.024; explicit and weakly compressible 0.015). Its dt is the CFL
@@ -204,6 +197,12 @@ fn the_taylor_green_vortex_decays_at_the_exact_rate_with_pressure_solved() {
     assert!(r.passed(), "{} {:.4}", r.measure, r.error);
 }
 
+/// The jet's axis offset reads where the fluid falls through the slab D/2 to 3D/2 above the
+/// plate, from the nozzle's axis: a rope displaced by 0.6 D there reads 0.6 D whatever lies
+/// above or below it and whatever pile at rest or rising fluid surrounds it (the fluid's
+/// centroid would read 0.3 D), a pile alone reads nothing, and so does an empty slab. The
+/// nozzle and the plate are placed off the origin, so that the slab and the distance must be
+/// taken from them.
 #[test]
 fn the_jet_axis_offset_reads_where_the_fluid_falls_just_above_the_plate() {
     use coil::validation::jet_axis::JetAxis;
