@@ -6,10 +6,10 @@
 //! same operator, kernel and walls at Eq. (10)'s bound, with the tolerances of the implicit
 //! viscosity's cases.
 
-use super::huppert::{self, Release, Spreading};
-use super::poiseuille::{simulate, Channel, CrossLaw};
+use super::huppert::Release;
+use super::poiseuille::{Channel, CrossLaw};
 use super::taylor_green::{self, Vortex};
-use super::{startup_poiseuille_in, CaseResult};
+use super::{cross_against_explicit, huppert_against_explicit, startup_against_explicit, CaseResult};
 use crate::scene::{DensityKernelKind, Pressure, VelocityGradient, ViscosityOperator, ViscositySolver, Walls};
 use std::time::Instant;
 
@@ -32,20 +32,8 @@ fn channels(across: usize) -> (Channel, Channel) {
 /// explicit solver's by at most 0.005 of the peak.
 pub fn startup_poiseuille_divergence_free(across: usize) -> Result<CaseResult, String> {
     let (explicit, solved) = channels(across);
-    let e = startup_poiseuille_in(&explicit, None)?;
-    let s = startup_poiseuille_in(&solved, None)?;
-    Ok(CaseResult {
-        case: format!("start-up Poiseuille, {SOLVED}, paper's walls, {across} across"),
-        measure: format!(
-            "max |u - u_ref| / u_max minus the explicit solver's on the same walls at the bound: {:.4} against {:.4}; {:.1} s against {:.1} s",
-            s.error, e.error, s.wall_s, e.wall_s
-        ),
-        error: s.error - e.error,
-        tolerance: 0.005,
-        at_least: false,
-        wall_s: s.wall_s + e.wall_s,
-        plot: None,
-    })
+    let case = format!("start-up Poiseuille, {SOLVED}, paper's walls, {across} across");
+    startup_against_explicit(&explicit, &solved, case, "on the same walls at the bound")
 }
 
 /// Steady Poiseuille of the Cross fluid (K = `k_s` s, n = `n`) at `across`: the profile within
@@ -54,26 +42,9 @@ pub fn cross_poiseuille_divergence_free(across: usize, k_s: f64, n: f64) -> Resu
     let law = CrossLaw { nu_inf_m2_s: 0.25e-6, k_s, n };
     let (explicit, solved) = channels(across);
     let (explicit, solved) = (Channel { cross: Some(law), ..explicit }, Channel { cross: Some(law), ..solved });
-    let end = 0.75 * explicit.gap_m * explicit.gap_m / law.nu_inf_m2_s;
-    let started = Instant::now();
-    let e = simulate(&explicit, &[end])?.remove(0);
-    let explicit_s = started.elapsed().as_secs_f64();
-    let started = Instant::now();
-    let s = simulate(&solved, &[end])?.remove(0);
-    let solved_s = started.elapsed().as_secs_f64();
-    let centre = e.iter().map(|p| p[1]).fold(0.0, f64::max);
-    let difference = e.iter().zip(&s).map(|(a, b)| (a[1] - b[1]).abs()).fold(0.0, f64::max) / centre;
-    Ok(CaseResult {
-        case: format!("steady Cross Poiseuille K = {k_s} s, n = {n}, {SOLVED}, paper's walls, {across} across"),
-        measure: format!(
-            "max |u_solved - u_explicit| / u_centre at t = {end} s, the explicit solver on the same walls at the bound; {solved_s:.1} s against {explicit_s:.1} s"
-        ),
-        error: difference,
-        tolerance: 0.002,
-        at_least: false,
-        wall_s: solved_s + explicit_s,
-        plot: None,
-    })
+    let fastest = |profile: &[[f64; 2]]| profile.iter().map(|p| p[1]).fold(0.0, f64::max);
+    let case = format!("steady Cross Poiseuille K = {k_s} s, n = {n}, {SOLVED}, paper's walls, {across} across");
+    cross_against_explicit(&explicit, &solved, fastest, case, "solved", "on the same walls at the bound")
 }
 
 /// The Taylor-Green vortex at `across`: the decay rate within 5 % of 8 pi^2 nu / L^2.
@@ -112,27 +83,6 @@ pub fn huppert_divergence_free(across: usize) -> Result<CaseResult, String> {
         ..Release::new(across, ViscosityOperator::Stress)
     };
     let solved = Release { own_density: Some(ViscositySolver::Implicit), pressure: Pressure::DivergenceFree, ..explicit };
-    let started = Instant::now();
-    let e = huppert::simulate(&explicit)?;
-    let explicit_s = started.elapsed().as_secs_f64();
-    let started = Instant::now();
-    let s = huppert::simulate(&solved)?;
-    let solved_s = started.elapsed().as_secs_f64();
-    let error = |r: &Spreading| (r.exponent / 0.125 - 1.0).abs();
-    let prefactor = |r: &Spreading| (r.prefactor / huppert::HUPPERT_PREFACTOR - 1.0).abs();
-    Ok(CaseResult {
-        case: format!("Huppert spreading, {SOLVED}, paper's plate, {across} across R0: as the explicit"),
-        measure: format!(
-            "|exponent error solved - explicit| on the same plate: {:.4} against {:.4}; prefactor errors {:.4} against {:.4}; {solved_s:.0} s against {explicit_s:.0} s",
-            error(&s),
-            error(&e),
-            prefactor(&s),
-            prefactor(&e)
-        ),
-        error: (error(&s) - error(&e)).abs(),
-        tolerance: 0.01,
-        at_least: false,
-        wall_s: solved_s + explicit_s,
-        plot: None,
-    })
+    let case = format!("Huppert spreading, {SOLVED}, paper's plate, {across} across R0: as the explicit");
+    huppert_against_explicit(&explicit, &solved, case, "solved", " on the same plate")
 }
