@@ -358,13 +358,15 @@ fn the_periodic_neighbor_loop_finds_exactly_the_nearest_images_within_h() {
 }
 
 /// The CPU backend's lists visit what the grid's loop visits, in its order and with its
-/// offsets to the bit, in f32 and f64, open and periodic, for particles with few neighbors and
-/// for particles in a cluster with more than the lists hold (visited through the grid).
+/// offsets to the bit, and the gradients they record are the grid's to the bit, in f32 and f64,
+/// open and periodic, for particles with few neighbors and for particles in a cluster with more
+/// than the lists hold (visited through the grid); with kernels other than those recorded the
+/// gradients are computed, not read.
 #[test]
 fn the_neighbor_lists_visit_the_grids_neighbors_in_its_order_to_the_bit() {
     use coil::cpu::neighbor_grid::NeighborGrid;
     use coil::simulation::particles::{ModelFields, Particles};
-    use coil_kernels::cell_grid::Neighborhood;
+    use coil_kernels::cell_grid::{GradientSum, Neighborhood};
     use coil_kernels::neighbor_list::NEIGHBOR_SLOTS;
     fn visits<R: Real, N: Neighbors>(nb: &N, i: usize, h2: R) -> Vec<(usize, [u64; 3], u64)> {
         let mut v = Vec::new();
@@ -373,11 +375,27 @@ fn the_neighbor_lists_visit_the_grids_neighbors_in_its_order_to_the_bit() {
         });
         v
     }
+    struct Gradients(Vec<(usize, [u64; 3])>);
+    impl<R: Real> GradientSum<R> for Gradients {
+        fn add(&mut self, j: usize, g: Vec3<R>) {
+            self.0.push((j, [g.x, g.y, g.z].map(|c| c.to_f64().to_bits())));
+        }
+    }
+    fn gradients<R: Real, N: Neighbors>(nb: &N, i: usize, kernels: &SmoothingKernels<R>) -> Vec<(usize, [u64; 3])> {
+        let mut sum = Gradients(Vec::new());
+        nb.sum_spiky_gradients(i, kernels, &mut sum);
+        sum.0
+    }
     fn compare<R: Real, T: coil_kernels::topology::Topology>(grid: &mut NeighborGrid, p: &Particles<f64>, h: f64, topology: T) {
-        let h2 = R::from_f64(h * h);
-        grid.record_neighbors(p.position_view(), h2, topology);
-        let (listed, plain): (_, Neighborhood<T>) =
-            (grid.listed_neighborhood(p.position_view(), topology), grid.neighborhood(p.position_view(), topology));
+        let kernels = SmoothingKernels::<R>::new(h);
+        let other = kernels.corrected(1.01, 1.0, 1.0);
+        let h2 = kernels.h2;
+        let mut recorded = vec![[R::ZERO; 3]; p.len() * NEIGHBOR_SLOTS];
+        grid.record_neighbors(p.position_view(), kernels, &mut recorded, topology);
+        let (listed, plain): (_, Neighborhood<T>) = (
+            grid.listed_neighborhood(p.position_view(), topology, kernels, &recorded),
+            grid.neighborhood(p.position_view(), topology),
+        );
         let (mut few, mut many) = (0, 0);
         for i in 0..p.len() {
             let expected = visits(&plain, i, h2);
@@ -387,6 +405,8 @@ fn the_neighbor_lists_visit_the_grids_neighbors_in_its_order_to_the_bit() {
                 many += 1;
             }
             assert_eq!(visits(&listed, i, h2), expected, "particle {i}");
+            assert_eq!(gradients(&listed, i, &kernels), gradients(&plain, i, &kernels), "particle {i}'s gradients");
+            assert_eq!(gradients(&listed, i, &other), gradients(&plain, i, &other), "particle {i}, other kernels");
         }
         assert!(few > 100 && many > 20, "{few} particles with a list, {many} beyond it");
     }
@@ -1219,16 +1239,8 @@ fn the_implicit_system_is_the_papers_operator_and_its_preconditioner_its_diagona
     let velocity = vec3_view(&v, n);
     let args = ImplicitStressArgs { neighborhood: nb, fluid, velocity, density, viscosity, stress };
     (0..n).for_each(|i| implicit_stress_pass(i, &args));
-    let product = SystemProductArgs {
-        neighborhood: nb,
-        fluid,
-        kick_dt: dt,
-        id,
-        density,
-        stress: stress.read(),
-        velocity,
-        product: x.product,
-    };
+    let product =
+        SystemProductArgs { neighborhood: nb, fluid, kick_dt: dt, id, stress: stress.read(), velocity, product: x.product };
     (0..n).for_each(|i| system_product_pass(i, &product));
     let (block_error, product_error, scale) = system_errors(&a, dt, x.block.read(), x.product.read(), &v);
     eprintln!("dt {dt:.2e} s, dt times the largest row sum {scale:.2e}: block error {block_error:.2e}, product error {product_error:.2e} m/s");
@@ -1354,16 +1366,8 @@ fn picard_iterations_solve_the_system_at_the_solutions_own_viscosity() {
             let args = ImplicitStressArgs { neighborhood: nb, fluid, velocity, density, viscosity: viscosity.read(), stress };
             (0..n).for_each(|i| implicit_stress_pass(i, &args));
             let out = coil::simulation::particles::vec3_view_mut(&mut product, n);
-            let args = SystemProductArgs {
-                neighborhood: nb,
-                fluid,
-                kick_dt: dt,
-                id,
-                density,
-                stress: stress.read(),
-                velocity,
-                product: out,
-            };
+            let args =
+                SystemProductArgs { neighborhood: nb, fluid, kick_dt: dt, id, stress: stress.read(), velocity, product: out };
             (0..n).for_each(|i| system_product_pass(i, &args));
             (0..3).map(|k| (0..n).map(|i| (v_star[k][i] - product[k][i]).powi(2)).sum::<f64>()).sum::<f64>().sqrt()
         };

@@ -312,16 +312,21 @@ fn same_results_on_any_thread_count<M: Model<f64>>(text: &str, model: M) {
 /// visits neighbors through (`Simulation::for_device`): every position and velocity the same to
 /// the bit after many steps, open and periodic, a jet's inlet (whose layers join the lists
 /// after each sort), mirrored walls, and each operator's passes (density; Eq. (8) and (9);
-/// hourglass control's gradient and pair force; Morris's shear-thinning viscosity and pair sum).
+/// hourglass control's gradient and pair force; Morris's shear-thinning viscosity and pair sum;
+/// implicit viscosity and solved pressure, which also read each pair's recorded gradient).
 #[test]
 fn the_cpu_neighbor_lists_give_the_grids_results_to_the_bit() {
+    use coil::simulation::implicit_viscosity::{ImplicitModel, StressOperator};
     use coil::simulation::model::{HourglassStressModel, ShearThinningMorrisModel};
+    use coil_kernels::neighbor_list::NEIGHBOR_SLOTS;
     fn compare<M: Model<f64>>(what: &str, text: &str, model: M, steps: usize) {
         let scene = common::scene(text);
         let initial = initial_particles(&scene, "test.toml").expect("valid");
         let mut listed = Simulation::new(&scene, &initial, model);
         let mut grid = Simulation::for_device(&scene, &initial, model);
-        let list_bytes = listed.particles().capacity() * 4 * coil_kernels::neighbor_list::NEIGHBOR_SLOTS;
+        let capacity = listed.particles().capacity();
+        let gradients = M::FIELDS.implicit || listed.run.pressure_solve.is_some();
+        let list_bytes = capacity * NEIGHBOR_SLOTS * (4 + if gradients { 3 * 8 } else { 0 });
         assert_eq!(
             listed.backend.memory_bytes(),
             grid.backend.memory_bytes() + list_bytes,
@@ -353,6 +358,17 @@ fn the_cpu_neighbor_lists_give_the_grids_results_to_the_bit() {
     compare("dam break, Laplacian operator", &dam, LaplacianModel(Newtonian { nu0: 0.05 }), 40);
     let mirrored = common::set(&dam, &["simulation.walls=mirrored"]);
     compare("dam break, mirrored walls", &mirrored, StressModel(cross, KernelSum), 40);
+    let solved = common::set(
+        &dam,
+        &[
+            "simulation.pressure=\"divergence_free\"",
+            "material.density_kernel=\"spiky\"",
+            "material.viscosity.solver=\"implicit\"",
+            "material.viscosity.velocity_gradient=\"own_density\"",
+        ],
+    );
+    let implicit = ImplicitModel { operator: StressOperator(cross), tolerance: 1e-3, max_iterations: 100, picard_iterations: 0 };
+    compare("dam break, implicit viscosity and solved pressure", &solved, implicit, 40);
     // The jet lands on a plate 12 mm below the nozzle at 0.02 s and spreads.
     let jet = common::jet_scene(
         "nozzle = { shape = \"circle\", radius_m = 0.006 }",

@@ -24,8 +24,10 @@ use coil_kernels::diagnostics::{range_figures, DiagnosticsArgs};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::{leapfrog_pass, LeapfrogArgs};
 use coil_kernels::mirrored_wall::{mirrored_wall_pass, MirroredWallArgs};
+use coil_kernels::neighbor_list::NEIGHBOR_SLOTS;
 use coil_kernels::nozzle::{nozzle_pass, nozzle_shift_pass, NozzleArgs, NozzleShiftArgs};
 use coil_kernels::shifting_sun2017::{shift_pass, shifting_pass, ShiftArgs, ShiftingArgs};
+use coil_kernels::smoothing::SmoothingKernels;
 use coil_kernels::topology::{Open, Periodic, Topology};
 use coil_kernels::velocity_gradient::GradientEstimate;
 use coil_kernels::view::{Vec3View, View, ViewMut};
@@ -49,22 +51,45 @@ use std::convert::Infallible;
 /// Particles per range of the diagnostics reduction.
 const DIAGNOSTICS_RANGE: usize = 1024;
 
+/// How the CPU backend's pair passes visit a particle's neighbors.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NeighborVisits {
+    /// Through the grid's cells, as a device does.
+    Grid,
+    /// Through lists that each sort records (`coil_kernels::neighbor_list`).
+    Lists,
+    /// Through lists, with each pair's spiky gradient recorded beside them: for solvers that
+    /// visit the neighbors many times a step.
+    ListsAndGradients,
+}
+
 pub struct CpuBackend<R> {
     host: HostParticles<R>,
-    /// The support radius squared (m^2), within which the neighbor lists hold pairs.
-    support_radius2: R,
+    /// The kernels of the pair passes: the lists hold the pairs within their support.
+    kernels: SmoothingKernels<R>,
+    /// `NEIGHBOR_SLOTS` per particle of capacity under `ListsAndGradients`, else empty.
+    spiky_gradient: Vec<[R; 3]>,
     /// Each wall particle's mirror image (m), x, y, z by id, under mirrored walls.
     wall_mirror: Option<[Vec<f64>; 3]>,
 }
 
 impl<R: Real> CpuBackend<R> {
-    /// The backend over `host`, visiting neighbors within `support_radius2` (m^2) through lists
-    /// that each sort rebuilds, or (`lists` false) through the grid's cells, as a device does.
-    pub fn new(mut host: HostParticles<R>, wall_mirror: Option<[Vec<f64>; 3]>, support_radius2: R, lists: bool) -> Self {
-        if lists {
+    /// The backend over `host`, with pair passes over `kernels`, visiting neighbors as
+    /// `visits` says.
+    pub fn new(
+        mut host: HostParticles<R>,
+        wall_mirror: Option<[Vec<f64>; 3]>,
+        kernels: SmoothingKernels<R>,
+        visits: NeighborVisits,
+    ) -> Self {
+        if visits != NeighborVisits::Grid {
             host.grid.keep_neighbor_lists();
         }
-        Self { host, support_radius2, wall_mirror }
+        let spiky_gradient = match visits {
+            NeighborVisits::ListsAndGradients => vec![[R::ZERO; 3]; host.particles.capacity() * NEIGHBOR_SLOTS],
+            _ => Vec::new(),
+        };
+        Self { host, kernels, spiky_gradient, wall_mirror }
     }
 
     /// The particles, to set a state by hand.
@@ -134,10 +159,11 @@ impl<R: Real> Backend<R> for CpuBackend<R> {
         let removed = grid.sort(particles);
         if grid.keeps_neighbor_lists() {
             let position = vec3_view(&particles.position, particles.len());
+            let (kernels, gradient) = (self.kernels, &mut self.spiky_gradient[..]);
             if grid.is_periodic() {
-                grid.record_neighbors(position, self.support_radius2, grid.periodic);
+                grid.record_neighbors(position, kernels, gradient, grid.periodic);
             } else {
-                grid.record_neighbors(position, self.support_radius2, Open);
+                grid.record_neighbors(position, kernels, gradient, Open);
             }
         }
         Ok(removed)
@@ -148,7 +174,8 @@ impl<R: Real> Backend<R> for CpuBackend<R> {
         let grid = &*grid;
         let mirror = self.wall_mirror.as_ref().map(|m| Vec3View::new(&m[0], &m[1], &m[2]));
         if grid.keeps_neighbor_lists() {
-            let lists = |position| grid.listed_neighborhood(position, topology);
+            let (kernels, gradient) = (self.kernels, &self.spiky_gradient[..]);
+            let lists = |position| grid.listed_neighborhood(position, topology, kernels, gradient);
             Self::run_with(particles, grid, topology, mirror, lists, schedule);
         } else {
             let cells = |position| grid.neighborhood(position, topology);
@@ -188,7 +215,8 @@ impl<R: Real> Backend<R> for CpuBackend<R> {
     fn memory_bytes(&self) -> usize {
         let mirror = self.wall_mirror.as_ref().map_or(0, |m| 3 * m[0].len() * std::mem::size_of::<f64>());
         let p = &self.host.particles;
-        p.capacity() * p.bytes_per_particle() + self.host.grid.bytes() + mirror
+        let gradients = self.spiky_gradient.len() * std::mem::size_of::<[R; 3]>();
+        p.capacity() * p.bytes_per_particle() + self.host.grid.bytes() + mirror + gradients
     }
 }
 

@@ -11,6 +11,7 @@ use coil_kernels::counting_sort::{
 };
 use coil_kernels::fluid_cells::{holds_fluid_pass, near_fluid_pass, HoldsFluidArgs, NearFluidArgs};
 use coil_kernels::neighbor_list::{neighbor_list_pass, ListedNeighborhood, NeighborListArgs, NEIGHBOR_SLOTS};
+use coil_kernels::smoothing::SmoothingKernels;
 use coil_kernels::topology::{Open, Periodic, Topology};
 use coil_kernels::view::{Vec3View, View, ViewMut};
 use coil_kernels::Real;
@@ -98,27 +99,48 @@ impl NeighborGrid {
         !self.neighbor_list.is_empty()
     }
 
-    /// Records the neighbors within `h2` (m^2) of the sorted particles at `position`, in
-    /// topology `topology`, when the grid keeps lists.
-    pub fn record_neighbors<R: Real, T: Topology>(&mut self, position: Vec3View<f64>, h2: R, topology: T) {
+    /// Records the neighbors within `kernels.h` of the sorted particles at `position`, in
+    /// topology `topology`, when the grid keeps lists, and each listed pair's spiky gradient
+    /// into `spiky_gradient` where it is not empty (`NEIGHBOR_SLOTS` per particle).
+    pub fn record_neighbors<R: Real, T: Topology>(
+        &mut self,
+        position: Vec3View<f64>,
+        kernels: SmoothingKernels<R>,
+        spiky_gradient: &mut [[R; 3]],
+        topology: T,
+    ) {
         if !self.keeps_neighbor_lists() {
             return;
         }
         let n = position.x.len();
         let mut list = std::mem::take(&mut self.neighbor_list);
+        let gradients = if spiky_gradient.is_empty() { 0 } else { n * NEIGHBOR_SLOTS };
         let args = NeighborListArgs {
             neighborhood: self.neighborhood(position, topology),
-            h2,
+            kernels,
             list: view_mut(&mut list, n * NEIGHBOR_SLOTS),
+            spiky_gradient: view_mut(spiky_gradient, gradients),
         };
         launch(n, |i| neighbor_list_pass(i, &args));
         self.neighbor_list = list;
     }
 
     /// The neighbors of the particles at `position` as the last `record_neighbors` over these
-    /// positions found them, for a grid that keeps lists.
-    pub fn listed_neighborhood<'a, T: Topology>(&'a self, position: Vec3View<'a, f64>, topology: T) -> ListedNeighborhood<'a, T> {
-        ListedNeighborhood { grid: self.neighborhood(position, topology), list: View::new(&self.neighbor_list) }
+    /// positions found them, with the gradients it recorded with `kernels`, for a grid that
+    /// keeps lists.
+    pub fn listed_neighborhood<'a, R: Real, T: Topology>(
+        &'a self,
+        position: Vec3View<'a, f64>,
+        topology: T,
+        kernels: SmoothingKernels<R>,
+        spiky_gradient: &'a [[R; 3]],
+    ) -> ListedNeighborhood<'a, T, R> {
+        ListedNeighborhood {
+            grid: self.neighborhood(position, topology),
+            list: View::new(&self.neighbor_list),
+            kernels,
+            spiky_gradient: View::new(spiky_gradient),
+        }
     }
 
     /// Bytes of the grid's own arrays.

@@ -144,7 +144,6 @@ impl<R: Real, Rh: Rheology<R> + 'static> ImplicitOperator<R> for StressOperator<
             fluid: s.fluid,
             kick_dt: step.kick_dt,
             id: s.id,
-            density: s.density,
             stress: stress.read(),
             velocity,
             product: step.arrays.product,

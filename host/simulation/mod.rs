@@ -11,7 +11,7 @@ pub mod run_state;
 pub mod time_step;
 
 use crate::cpu::neighbor_grid::NeighborGrid;
-use crate::cpu::CpuBackend;
+use crate::cpu::{CpuBackend, NeighborVisits};
 use crate::scene::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, InitialParticles};
 use crate::scene::{DensityKernelKind, Pressure, Scene, ViscositySolver, ViscousVelocity, Walls};
 use crate::simulation::divergence_free::PressureSolve;
@@ -310,10 +310,16 @@ impl<R: Real, M: Model<R>> Simulation<R, M> {
     }
 
     /// The run `setup` on the CPU, with neighbor lists or not; fresh runs then start with
-    /// [`Self::sort_and_density`].
+    /// [`Self::sort_and_density`]. The lists also hold each pair's kernel gradient where a
+    /// solver visits the neighbors many times a step (implicit viscosity, solved pressure).
     pub fn on_cpu(setup: Setup<R, M>, lists: bool) -> Self {
         let Setup { run, host, wall_mirror } = setup;
-        let backend = CpuBackend::new(host, wall_mirror, run.fluid.kernels.h2, lists);
+        let visits = match lists {
+            false => NeighborVisits::Grid,
+            true if M::FIELDS.implicit || run.pressure_solve.is_some() => NeighborVisits::ListsAndGradients,
+            true => NeighborVisits::Lists,
+        };
+        let backend = CpuBackend::new(host, wall_mirror, run.fluid.kernels, visits);
         Self { run, backend }
     }
 

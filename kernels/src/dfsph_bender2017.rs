@@ -31,7 +31,7 @@
 //! [`error_sum_pass`] and [`pressure_change_pass`]; the model's accelerations; then the same
 //! with [`density_error_pass`] on the acceleration.
 
-use crate::cell_grid::{Neighborhood, Neighbors};
+use crate::cell_grid::{GradientSum, Neighborhood, Neighbors};
 use crate::fluid::Fluid;
 use crate::real::Real;
 use crate::topology::Open;
@@ -68,17 +68,9 @@ pub struct FactorArgs<'a, R, N = Neighborhood<'a, Open>> {
 pub fn factor_pass<R: Real, N: Neighbors>(i: usize, a: &FactorArgs<R, N>) {
     let mut factor = R::ZERO;
     if !a.fluid.is_boundary(a.id.at(i)) {
-        let m = a.fluid.mass;
-        let mut sum = Vec3::zero();
-        let mut squares = R::ZERO;
-        a.neighborhood.for_each_neighbor(i, a.fluid.kernels.h2, |j, r_ij: Vec3<R>, r2| {
-            let grad = a.fluid.kernels.spiky_gradient(r_ij, r2) * m;
-            sum += grad;
-            if !a.fluid.is_boundary(a.id.at(j)) {
-                squares += grad.dot(grad);
-            }
-        });
-        let denominator = sum.dot(sum) + squares;
+        let mut sums = FactorSums { args: a, sum: Vec3::zero(), squares: R::ZERO };
+        a.neighborhood.sum_spiky_gradients(i, &a.fluid.kernels, &mut sums);
+        let denominator = sums.sum.dot(sums.sum) + sums.squares;
         if denominator > R::ZERO {
             factor = a.density.at(i) / denominator;
         }
@@ -87,24 +79,84 @@ pub fn factor_pass<R: Real, N: Neighbors>(i: usize, a: &FactorArgs<R, N>) {
     unsafe { a.factor.write(i, factor) };
 }
 
+/// The sums of [`factor_pass`]: sum_j m_j grad W_ij, and sum_j |m_j grad W_ij|^2 over fluid.
+struct FactorSums<'s, 'a, R, N> {
+    args: &'s FactorArgs<'a, R, N>,
+    sum: Vec3<R>,
+    squares: R,
+}
+
+impl<R: Real, N> GradientSum<R> for FactorSums<'_, '_, R, N> {
+    #[inline(always)]
+    fn add(&mut self, j: usize, grad_w: Vec3<R>) {
+        let grad = grad_w * self.args.fluid.mass;
+        self.sum += grad;
+        if !self.args.fluid.is_boundary(self.args.id.at(j)) {
+            self.squares += grad.dot(grad);
+        }
+    }
+}
+
+/// A velocity field the density change is predicted from (m/s).
+trait VelocityField<R> {
+    fn at(&self, j: usize) -> Vec3<R>;
+}
+
+/// v_{n-1/2}.
+struct HalfStep<'a, R>(Vec3View<'a, R>);
+
+impl<R: Real> VelocityField<R> for HalfStep<'_, R> {
+    #[inline(always)]
+    fn at(&self, j: usize) -> Vec3<R> {
+        vec3(self.0.at(j))
+    }
+}
+
+/// v_{n-1/2} + kick_dt a, the velocity the step would end at.
+struct Kicked<'a, R> {
+    velocity_half: Vec3View<'a, R>,
+    acceleration: Vec3View<'a, R>,
+    kick_dt: R,
+}
+
+impl<R: Real> VelocityField<R> for Kicked<'_, R> {
+    #[inline(always)]
+    fn at(&self, j: usize) -> Vec3<R> {
+        vec3(self.velocity_half.at(j)) + vec3(self.acceleration.at(j)) * self.kick_dt
+    }
+}
+
+/// The sums of [`density_change`]: sum_j (v_i - v_j) . grad W_ij, and the neighbors besides i.
+struct DensityChange<V, R> {
+    velocity: V,
+    i: usize,
+    v_i: Vec3<R>,
+    change: R,
+    neighbors: u32,
+}
+
+impl<R: Real, V: VelocityField<R>> GradientSum<R> for DensityChange<V, R> {
+    #[inline(always)]
+    fn add(&mut self, j: usize, grad_w: Vec3<R>) {
+        self.change += (self.v_i - self.velocity.at(j)).dot(grad_w);
+        self.neighbors += (j != self.i) as u32;
+    }
+}
+
 /// dt sum_j m_j (v_i - v_j) . grad W_ij (kg/m^3): the density change over dt that velocity
-/// `v` makes at particle `i`, and how many neighbors it has besides itself.
+/// `velocity` makes at particle `i`, and how many neighbors it has besides itself.
 #[inline(always)]
-fn density_change<R: Real, N: Neighbors>(
+fn density_change<R: Real, N: Neighbors, V: VelocityField<R>>(
     i: usize,
     neighborhood: &N,
     fluid: &Fluid<R>,
     dt: R,
-    v: impl Fn(usize) -> Vec3<R>,
+    velocity: V,
 ) -> (R, u32) {
-    let v_i = v(i);
-    let mut change = R::ZERO;
-    let mut neighbors = 0;
-    neighborhood.for_each_neighbor(i, fluid.kernels.h2, |j, r_ij: Vec3<R>, r2| {
-        change += (v_i - v(j)).dot(fluid.kernels.spiky_gradient(r_ij, r2));
-        neighbors += (r2 > R::ZERO) as u32;
-    });
-    (change * fluid.mass * dt, neighbors)
+    let v_i = velocity.at(i);
+    let mut sums = DensityChange { velocity, i, v_i, change: R::ZERO, neighbors: 0 };
+    neighborhood.sum_spiky_gradients(i, &fluid.kernels, &mut sums);
+    (sums.change * fluid.mass * dt, sums.neighbors)
 }
 
 /// Below this many neighbors (of 32 inside the fluid at h = 2 spacings) a particle takes no
@@ -170,7 +222,7 @@ pub fn divergence_error_pass<R: Real, N: Neighbors>(i: usize, a: &DivergenceErro
     let (mut error, mut s) = (R::ZERO, R::ZERO);
     let factor = a.factor.at(i);
     if factor > R::ZERO {
-        let (change, neighbors) = density_change(i, &a.neighborhood, &a.fluid, a.dt, |j| vec3(a.velocity_half.at(j)));
+        let (change, neighbors) = density_change(i, &a.neighborhood, &a.fluid, a.dt, HalfStep(a.velocity_half));
         let applied = a.stiffness_sum.at(i);
         (error, s) = if neighbors < DIVERGENCE_NEIGHBORS {
             (R::ZERO, -applied)
@@ -220,7 +272,7 @@ pub fn density_error_pass<R: Real, N: Neighbors>(i: usize, a: &DensityErrorArgs<
     let (mut error, mut s) = (R::ZERO, R::ZERO);
     let factor = a.factor.at(i);
     if factor > R::ZERO {
-        let velocity = |j| vec3(a.velocity_half.at(j)) + vec3(a.acceleration.at(j)) * a.kick_dt;
+        let velocity = Kicked { velocity_half: a.velocity_half, acceleration: a.acceleration, kick_dt: a.kick_dt };
         let rho = a.density.at(i);
         let excess = rho + density_change(i, &a.neighborhood, &a.fluid, a.dt, velocity).0 - a.fluid.rest_density;
         (error, s) = projected(excess, factor, rho, a.dt, a.kick_dt, a.relaxation, a.stiffness_sum.at(i));
@@ -258,17 +310,30 @@ pub fn pressure_change_pass<R: Real, N: Neighbors>(i: usize, a: &PressureChangeA
         return;
     }
     let s_i = a.stiffness.at(i);
-    let mut acceleration = Vec3::zero();
-    a.neighborhood.for_each_neighbor(i, a.fluid.kernels.h2, |j, r_ij: Vec3<R>, r2| {
-        let s_j = if a.fluid.is_boundary(a.id.at(j)) { R::ZERO } else { a.stiffness.at(j) };
-        acceleration = acceleration - a.fluid.kernels.spiky_gradient(r_ij, r2) * (s_i + s_j);
-    });
-    let change = acceleration * (a.fluid.mass * a.scale);
+    let mut sum = PressureSum { args: a, s_i, acceleration: Vec3::zero() };
+    a.neighborhood.sum_spiky_gradients(i, &a.fluid.kernels, &mut sum);
+    let change = sum.acceleration * (a.fluid.mass * a.scale);
     let t = vec3(a.target.at(i)) + change;
     // SAFETY: invocation i owns entry i of both outputs.
     unsafe {
         a.target.write(i, [t.x, t.y, t.z]);
         a.stiffness_sum.write(i, a.stiffness_sum.at(i) + s_i);
+    }
+}
+
+/// The sum of [`pressure_change_pass`]: -sum_j (s_i + s_j) grad W_ij.
+struct PressureSum<'s, 'a, R, N> {
+    args: &'s PressureChangeArgs<'a, R, N>,
+    s_i: R,
+    acceleration: Vec3<R>,
+}
+
+impl<R: Real, N> GradientSum<R> for PressureSum<'_, '_, R, N> {
+    #[inline(always)]
+    fn add(&mut self, j: usize, grad_w: Vec3<R>) {
+        let a = self.args;
+        let s_j = if a.fluid.is_boundary(a.id.at(j)) { R::ZERO } else { a.stiffness.at(j) };
+        self.acceleration = self.acceleration - grad_w * (self.s_i + s_j);
     }
 }
 

@@ -46,6 +46,12 @@ impl<R: Real> SmoothingKernels<R> {
         }
     }
 
+    /// The spiky gradient's coefficient, -45 / (pi h^6) times any correction (1/m^6).
+    #[inline(always)]
+    pub fn spiky_gradient_coefficient(&self) -> R {
+        self.spiky_gradient_coefficient
+    }
+
     /// poly6: W(r) = 315 / (64 pi h^9) (h^2 - r^2)^3 for r < h (1/m^3). Used by Eq. (5).
     #[inline(always)]
     pub fn poly6(&self, r2: R) -> R {

@@ -1,7 +1,7 @@
 //! Velocity gradient, rate of deformation and shear rate (Eq. (8), (2)), which every viscous
 //! pre-pass reads (Algorithm 1, line 10).
 
-use crate::cell_grid::Neighbors;
+use crate::cell_grid::{GradientSum, Neighbors};
 use crate::fluid::Fluid;
 use crate::real::Real;
 use crate::vec3::{Mat3, SymTensor, Vec3};
@@ -41,16 +41,38 @@ pub(crate) fn kernel_sums<R: Real, N: Neighbors, const MOMENT: bool, const OWN_D
     let own_volume_over_mass = if OWN_DENSITY { R::ONE / density.at(i) } else { R::ZERO };
     let mut grad = Mat3::zero();
     let mut moment = Mat3::zero();
-    neighborhood.for_each_neighbor(i, fluid.kernels.h2, |j, r_ij, r2| {
-        let [x, y, z] = velocity.at(j);
-        let volume_over_mass = if OWN_DENSITY { own_volume_over_mass } else { R::ONE / density.at(j) };
-        let grad_w = fluid.kernels.spiky_gradient(r_ij, r2);
-        grad.add_outer((Vec3::new(x, y, z) - vi) * volume_over_mass, grad_w);
-        if MOMENT {
+    if MOMENT {
+        neighborhood.for_each_neighbor(i, fluid.kernels.h2, |j, r_ij, r2| {
+            let [x, y, z] = velocity.at(j);
+            let volume_over_mass = if OWN_DENSITY { own_volume_over_mass } else { R::ONE / density.at(j) };
+            let grad_w = fluid.kernels.spiky_gradient(r_ij, r2);
+            grad.add_outer((Vec3::new(x, y, z) - vi) * volume_over_mass, grad_w);
             moment.add_outer(-r_ij * volume_over_mass, grad_w);
-        }
-    });
+        });
+    } else {
+        let mut sum = GradientSumOf::<R, OWN_DENSITY> { velocity, density, vi, own_volume_over_mass, grad };
+        neighborhood.sum_spiky_gradients(i, &fluid.kernels, &mut sum);
+        grad = sum.grad;
+    }
     Some((grad.scaled(fluid.mass), moment.scaled(fluid.mass)))
+}
+
+/// Eq. (8)'s sum without the moment: sum_j V_j / m_j (v_j - v_i) ⊗ grad_i W(x_ij).
+struct GradientSumOf<'v, 'a, R, const OWN_DENSITY: bool> {
+    velocity: &'v Vec3View<'a, R>,
+    density: &'v View<'a, R>,
+    vi: Vec3<R>,
+    own_volume_over_mass: R,
+    grad: Mat3<R>,
+}
+
+impl<R: Real, const OWN_DENSITY: bool> GradientSum<R> for GradientSumOf<'_, '_, R, OWN_DENSITY> {
+    #[inline(always)]
+    fn add(&mut self, j: usize, grad_w: Vec3<R>) {
+        let [x, y, z] = self.velocity.at(j);
+        let volume_over_mass = if OWN_DENSITY { self.own_volume_over_mass } else { R::ONE / self.density.at(j) };
+        self.grad.add_outer((Vec3::new(x, y, z) - self.vi) * volume_over_mass, grad_w);
+    }
 }
 
 /// How a pass estimates the velocity gradient, fixed for a run.
