@@ -39,26 +39,22 @@ pub(crate) fn kernel_sums<R: Real, N: Neighbors, const MOMENT: bool, const OWN_D
     let [vx, vy, vz] = velocity.at(i);
     let vi = Vec3::new(vx, vy, vz);
     let own_volume_over_mass = if OWN_DENSITY { R::ONE / density.at(i) } else { R::ZERO };
-    let mut grad = Mat3::zero();
+    let mut sum = VelocityGradientSum::<R, OWN_DENSITY> { velocity, density, vi, own_volume_over_mass, grad: Mat3::zero() };
     let mut moment = Mat3::zero();
     if MOMENT {
         neighborhood.for_each_neighbor(i, fluid.kernels.h2, |j, r_ij, r2| {
-            let [x, y, z] = velocity.at(j);
-            let volume_over_mass = if OWN_DENSITY { own_volume_over_mass } else { R::ONE / density.at(j) };
             let grad_w = fluid.kernels.spiky_gradient(r_ij, r2);
-            grad.add_outer((Vec3::new(x, y, z) - vi) * volume_over_mass, grad_w);
-            moment.add_outer(-r_ij * volume_over_mass, grad_w);
+            sum.add(j, grad_w);
+            moment.add_outer(-r_ij * sum.volume_over_mass(j), grad_w);
         });
     } else {
-        let mut sum = GradientSumOf::<R, OWN_DENSITY> { velocity, density, vi, own_volume_over_mass, grad };
         neighborhood.sum_spiky_gradients(i, &fluid.kernels, &mut sum);
-        grad = sum.grad;
     }
-    Some((grad.scaled(fluid.mass), moment.scaled(fluid.mass)))
+    Some((sum.grad.scaled(fluid.mass), moment.scaled(fluid.mass)))
 }
 
-/// Eq. (8)'s sum without the moment: sum_j V_j / m_j (v_j - v_i) ⊗ grad_i W(x_ij).
-struct GradientSumOf<'v, 'a, R, const OWN_DENSITY: bool> {
+/// Eq. (8)'s sum without the mass: sum_j (V_j / m_j) (v_j - v_i) ⊗ grad_i W(x_ij).
+struct VelocityGradientSum<'v, 'a, R, const OWN_DENSITY: bool> {
     velocity: &'v Vec3View<'a, R>,
     density: &'v View<'a, R>,
     vi: Vec3<R>,
@@ -66,12 +62,23 @@ struct GradientSumOf<'v, 'a, R, const OWN_DENSITY: bool> {
     grad: Mat3<R>,
 }
 
-impl<R: Real, const OWN_DENSITY: bool> GradientSum<R> for GradientSumOf<'_, '_, R, OWN_DENSITY> {
+impl<R: Real, const OWN_DENSITY: bool> VelocityGradientSum<'_, '_, R, OWN_DENSITY> {
+    /// V_j / m_j (m^3/kg): 1 / rho_i at the own density, else 1 / rho_j.
+    #[inline(always)]
+    fn volume_over_mass(&self, j: usize) -> R {
+        if OWN_DENSITY {
+            self.own_volume_over_mass
+        } else {
+            R::ONE / self.density.at(j)
+        }
+    }
+}
+
+impl<R: Real, const OWN_DENSITY: bool> GradientSum<R> for VelocityGradientSum<'_, '_, R, OWN_DENSITY> {
     #[inline(always)]
     fn add(&mut self, j: usize, grad_w: Vec3<R>) {
         let [x, y, z] = self.velocity.at(j);
-        let volume_over_mass = if OWN_DENSITY { self.own_volume_over_mass } else { R::ONE / self.density.at(j) };
-        self.grad.add_outer((Vec3::new(x, y, z) - self.vi) * volume_over_mass, grad_w);
+        self.grad.add_outer((Vec3::new(x, y, z) - self.vi) * self.volume_over_mass(j), grad_w);
     }
 }
 
