@@ -497,8 +497,9 @@ fn implicit_viscosity_on_the_gpu_agrees_with_the_cpu() {
 
 /// Divergence-free pressure: the factors, both solves' sweeps, their error sums read back every
 /// sweep, and their warm starts (state the sort gathers and the inlet appends at zero) move the
-/// particles as on the CPU; a jet held by its nozzle's tube with implicit viscosity, and a
-/// block falling in a closed box, whose walls make the solves sweep.
+/// particles as on the CPU; a jet held by its nozzle's tube with implicit viscosity, on the
+/// paper's plate and a mirrored one, and a block falling in a closed box, whose walls make the
+/// solves sweep.
 #[test]
 fn divergence_free_pressure_on_the_gpu_agrees_with_the_cpu() {
     use coil::scene::{DensityEquation, Pressure, ViscositySolver};
@@ -525,7 +526,10 @@ fn divergence_free_pressure_on_the_gpu_agrees_with_the_cpu() {
     jet.material.viscosity.solver = ViscositySolver::Implicit;
     jet.material.viscosity.velocity_gradient = coil::scene::VelocityGradient::OwnDensity;
     let operator = StressOperator(Newtonian { nu0: 0.001 });
-    agree(&jet, ImplicitModel { operator, tolerance: 1e-3, max_iterations: 100, picard_iterations: 0 }, "jet");
+    let implicit = ImplicitModel { operator, tolerance: 1e-3, max_iterations: 100, picard_iterations: 0 };
+    agree(&jet, implicit, "jet");
+    jet.simulation.walls = coil::scene::Walls::Mirrored;
+    agree(&jet, implicit, "jet on a mirrored plate");
     let falling = common::set(
         &common::box_scene(0.02, [0.3, 0.3, 0.2], [0.12, 0.2, 0.2], ""),
         &[

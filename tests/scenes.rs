@@ -111,7 +111,10 @@ fn bad_scenes_exit_2_naming_file_and_field() {
     let solved = ["simulation.pressure=divergence_free", "material.density_equation=summation", "material.density_kernel=spiky"];
     let refused = [
         (&["simulation.pressure=divergence_free", "material.density_equation=continuity"][..], "material.density_equation"),
-        (&["simulation.walls=mirrored"], "simulation.walls"),
+        (
+            &["simulation.walls=mirrored", "simulation.time_step.viscous_velocity=half_step"],
+            "simulation.time_step.viscous_velocity",
+        ),
         (&["material.density_kernel=poly6"], "material.density_kernel"),
         (&["simulation.divergence_free.relaxation=1.0"], "simulation.divergence_free.relaxation"),
         (&["simulation.divergence_free.relaxation=0"], "simulation.divergence_free.relaxation"),

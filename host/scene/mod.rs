@@ -559,8 +559,9 @@ pub enum Walls {
     Paper,
     /// The flow mirrored through the wall surface (fixed ghost particles, Marrone et al. 2011):
     /// minus the fluid's velocity at each wall particle's mirror image, so no slip on the wall
-    /// itself, and the pressure there plus the hydrostatic difference (Adami et al. 2012). One
-    /// more pass over the particles per step and 24 bytes per wall particle.
+    /// itself, and the pressure there plus the hydrostatic difference (Adami et al. 2012); where
+    /// pressure is solved, the velocity only. One more pass over the particles per step and 24
+    /// bytes per wall particle.
     Mirrored,
 }
 

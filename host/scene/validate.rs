@@ -6,7 +6,7 @@ use super::{
     ViscositySolver,
 };
 use super::{
-    DensityEquation, DensityKernelKind, Precision, Pressure, SimulationSettings, Walls, MAX_HOURGLASS_CONTROL,
+    DensityEquation, DensityKernelKind, Precision, Pressure, SimulationSettings, ViscousVelocity, Walls, MAX_HOURGLASS_CONTROL,
     MAX_PARTICLE_SHIFTING,
 };
 use crate::simulation::time_step::{Cfl, Limit, StabilityBound, TimeStepper};
@@ -370,10 +370,10 @@ impl Check<'_> {
                     .into(),
             );
         }
-        if s.walls == Walls::Mirrored {
+        if s.walls == Walls::Mirrored && s.time_step.viscous_velocity == ViscousVelocity::HalfStep {
             return self.fail(
-                "simulation.pressure",
-                "\"divergence_free\" runs with the paper's walls; set simulation.walls = \"paper\"".into(),
+                "simulation.time_step.viscous_velocity",
+                "mirrored walls write their ghost velocities into the velocity the viscous terms read, and \"divergence_free\" needs the walls' half-step velocity at rest; set it to \"full_step\" or simulation.walls = \"paper\"".into(),
             );
         }
         if m.density_kernel != DensityKernelKind::Spiky {

@@ -1,10 +1,9 @@
 //! The cases with pressure solved (divergence-free SPH, docs/divergence-free.md), each at the
 //! CFL time step with implicit viscosity on the paper's operator with the own-density gradient
-//! and the spiky density kernel. The vortex, which has no walls, is held to its exact decay. A
-//! solved pressure stands on the paper's walls only (it takes no mirrored ones), so the
+//! and the spiky density kernel. The vortex, which has no walls, is held to its exact decay. The
 //! channels and the spreading are compared with the weakly compressible explicit solver on the
 //! same operator, kernel and walls at Eq. (10)'s bound, with the tolerances of the implicit
-//! viscosity's cases.
+//! viscosity's cases: on the paper's walls, which slip, and on mirrored ones, which do not.
 
 use super::huppert::Release;
 use super::poiseuille::{Channel, CrossLaw};
@@ -15,12 +14,11 @@ use std::time::Instant;
 
 const SOLVED: &str = "divergence-free pressure, implicit viscosity (paper's operator, own density) at the CFL step";
 
-/// Morris et al.'s channel at `across` on the paper's walls with the spiky density kernel, with
-/// the explicit solver on the paper's operator with the own-density gradient, and the same
-/// solved.
-fn channels(across: usize) -> (Channel, Channel) {
+/// Morris et al.'s channel at `across` on `walls` with the spiky density kernel, with the
+/// explicit solver on the paper's operator with the own-density gradient, and the same solved.
+fn channels(across: usize, walls: Walls) -> (Channel, Channel) {
     let explicit = Channel {
-        walls: Walls::Paper,
+        walls,
         density_kernel: DensityKernelKind::Spiky,
         velocity_gradient: VelocityGradient::OwnDensity,
         ..Channel::morris(across, ViscosityOperator::Stress)
@@ -28,11 +26,11 @@ fn channels(across: usize) -> (Channel, Channel) {
     (explicit, Channel { solver: ViscositySolver::Implicit, pressure: Pressure::DivergenceFree, ..explicit })
 }
 
-/// Start-up Poiseuille at `across`: the error against Morris et al.'s series may exceed the
-/// explicit solver's by at most 0.005 of the peak.
-pub fn startup_poiseuille_divergence_free(across: usize) -> Result<CaseResult, String> {
-    let (explicit, solved) = channels(across);
-    let case = format!("start-up Poiseuille, {SOLVED}, paper's walls, {across} across");
+/// Start-up Poiseuille at `across` on `walls`: the error against Morris et al.'s series may
+/// exceed the explicit solver's by at most 0.005 of the peak.
+pub fn startup_poiseuille_divergence_free(across: usize, walls: Walls) -> Result<CaseResult, String> {
+    let (explicit, solved) = channels(across, walls);
+    let case = format!("start-up Poiseuille, {SOLVED}, {}, {across} across", walls_name(walls));
     startup_against_explicit(&explicit, &solved, case, "on the same walls at the bound")
 }
 
@@ -40,7 +38,7 @@ pub fn startup_poiseuille_divergence_free(across: usize) -> Result<CaseResult, S
 /// 0.002 of the centre speed of the explicit solver's.
 pub fn cross_poiseuille_divergence_free(across: usize, k_s: f64, n: f64) -> Result<CaseResult, String> {
     let law = CrossLaw { nu_inf_m2_s: 0.25e-6, k_s, n };
-    let (explicit, solved) = channels(across);
+    let (explicit, solved) = channels(across, Walls::Paper);
     let (explicit, solved) = (Channel { cross: Some(law), ..explicit }, Channel { cross: Some(law), ..solved });
     let fastest = |profile: &[[f64; 2]]| profile.iter().map(|p| p[1]).fold(0.0, f64::max);
     let case = format!("steady Cross Poiseuille K = {k_s} s, n = {n}, {SOLVED}, paper's walls, {across} across");
@@ -73,16 +71,23 @@ pub fn taylor_green_divergence_free(across: usize) -> Result<CaseResult, String>
     })
 }
 
-/// Huppert's spreading at `across` R0 on the paper's plate: the fitted exponent's error within
+/// Huppert's spreading at `across` R0 on a plate of `walls`: the fitted exponent's error within
 /// 0.01 of the explicit solver's.
-pub fn huppert_divergence_free(across: usize) -> Result<CaseResult, String> {
+pub fn huppert_divergence_free(across: usize, walls: Walls) -> Result<CaseResult, String> {
     let explicit = Release {
         own_density: Some(ViscositySolver::Explicit),
-        walls: Walls::Paper,
+        walls,
         density_kernel: DensityKernelKind::Spiky,
         ..Release::new(across, ViscosityOperator::Stress)
     };
     let solved = Release { own_density: Some(ViscositySolver::Implicit), pressure: Pressure::DivergenceFree, ..explicit };
-    let case = format!("Huppert spreading, {SOLVED}, paper's plate, {across} across R0: as the explicit");
+    let case = format!("Huppert spreading, {SOLVED}, {}, {across} across R0: as the explicit", walls_name(walls));
     huppert_against_explicit(&explicit, &solved, case, "solved", " on the same plate")
+}
+
+fn walls_name(walls: Walls) -> &'static str {
+    match walls {
+        Walls::Paper => "paper's walls",
+        Walls::Mirrored => "mirrored walls",
+    }
 }

@@ -11,7 +11,7 @@ use super::{
     torus_implicit, torus_ordering, viscous_thread, CaseResult, HOURGLASS_CONTROL,
 };
 use crate::output::write_atomically;
-use crate::scene::ViscosityOperator;
+use crate::scene::{ViscosityOperator, Walls};
 use std::fmt;
 use std::path::Path;
 
@@ -134,7 +134,9 @@ fn cases(quick: bool, out: &Path) -> Vec<Case<'_>> {
         }
         cases.push(Case::one(Group::Cross, true, move || cross_poiseuille_implicit(cross_across, op, 10.0, 0.5, 10.0)));
     }
-    cases.push(Case::one(Group::Poiseuille, true, || startup_poiseuille_divergence_free(20)));
+    for walls in [Walls::Paper, Walls::Mirrored] {
+        cases.push(Case::one(Group::Poiseuille, true, move || startup_poiseuille_divergence_free(20, walls)));
+    }
     cases.push(Case::one(Group::Cross, false, move || cross_poiseuille_divergence_free(cross_across, 10.0, 0.5)));
     for op in [ViscosityOperator::Stress, ViscosityOperator::Morris] {
         for (k, n) in cross_laws {
@@ -163,7 +165,9 @@ fn cases(quick: bool, out: &Path) -> Vec<Case<'_>> {
         cases.push(Case::new(Group::Huppert, !paper(op), move || huppert_spreading(release_across, op, hg, out)));
     }
     cases.push(Case::one(Group::Huppert, true, move || huppert_implicit(release_across)));
-    cases.push(Case::one(Group::Huppert, false, move || huppert_divergence_free(release_across)));
+    for walls in [Walls::Paper, Walls::Mirrored] {
+        cases.push(Case::one(Group::Huppert, false, move || huppert_divergence_free(release_across, walls)));
+    }
     let thread_resolutions: &[f64] = if quick { &[5.0] } else { &[5.0, 8.0, 12.0] };
     for &across in thread_resolutions {
         for op in [ViscosityOperator::Stress, ViscosityOperator::Laplacian, ViscosityOperator::Morris] {

@@ -142,6 +142,11 @@ pub fn mirrored_wall_pass<R: Real, T: Topology>(i: usize, a: &MirroredWallArgs<R
     // which no invocation of this pass writes.
     unsafe {
         a.velocity.write(i, [v.x, v.y, v.z]);
-        a.density.write(i, a.fluid.rest_density + p / a.fluid.sound_speed2);
+        // Where pressure is solved (c = 0) there is no Eq. (6) to invert: the wall keeps its
+        // summed density and pushes as the paper's wall does (`dfsph_bender2017`); only its
+        // velocity mirrors the fluid, which is what makes it no-slip.
+        if a.fluid.sound_speed2 > R::ZERO {
+            a.density.write(i, a.fluid.rest_density + p / a.fluid.sound_speed2);
+        }
     }
 }
