@@ -348,6 +348,8 @@ fn coil_axis_measures_in_the_frames_what_validate_measures_as_the_jet_runs() {
         .and_then(|o| o.parse().ok())
         .unwrap_or_else(|| panic!("no largest offset in {printed}"));
     assert!((printed_largest - largest).abs() <= 5e-4, "{printed}\nagainst {largest}");
+    let pattern = if largest < 0.1 { "pattern: straight" } else { "pattern: near the axis" };
+    assert!(printed.lines().any(|l| l.starts_with(pattern)), "{printed}");
 
     // Runs the axis cannot be read from: a moving nozzle, and frames written as PLY only.
     for (name, set, reason) in [
@@ -452,4 +454,58 @@ fn huppert_spreading_follows_the_similarity_law_with_morris() {
     assert!((r.exponent / 0.125 - 1.0).abs() < 0.1, "exponent {}", r.exponent);
     assert!((r.prefactor / HUPPERT_PREFACTOR - 1.0).abs() < 0.1, "prefactor {}", r.prefactor);
     assert!(r.fitted >= 10, "{} samples past 1.5 R0", r.fitted);
+}
+
+/// Samples every 0.02 s over 0.8 s of a foot at `at(t)` (over D).
+fn foot_samples(at: impl Fn(f64) -> [f64; 2]) -> Vec<coil::validation::jet_axis::AxisSample> {
+    (1..=40)
+        .map(|k| {
+            let t = 0.02 * k as f64;
+            coil::validation::jet_axis::AxisSample { time_s: t, displacement_over_d: Some(at(t)) }
+        })
+        .collect()
+}
+
+/// The rope's pattern from synthetic frames: a foot that leaves the axis at 0.3 s and circles
+/// it clockwise (seen from above) at 0.5 D and 5 turns a second coils -2.5 turns; one that
+/// swings through the axis along a tilted line, whatever its small sideways wander, folds:
+/// twice for one period, four times for two, counted from its first frame 0.2 D off the axis
+/// (0.32 s); a foot within 0.08 D is straight, one within 0.15 D near the axis; half a turn,
+/// then still, is neither.
+#[test]
+fn the_ropes_pattern_is_read_from_the_direction_of_its_offset() {
+    use coil::validation::rope_motion::{rope_motion, Pattern};
+    use std::f64::consts::TAU;
+    let circling = |t: f64| {
+        if t < 0.3 {
+            return [0.01 * t, 0.0];
+        }
+        let a = -TAU * 5.0 * (t - 0.3);
+        [0.5 * a.sin(), 0.5 * a.cos()]
+    };
+    let m = rope_motion(&foot_samples(circling)).expect("measured");
+    assert_eq!(m.pattern, Pattern::Coiling, "{m:?}");
+    assert!((m.turns + 2.5).abs() < 1e-9 && (m.turns_either_way - 2.5).abs() < 1e-9, "{m:?}");
+    assert!((m.frequency_hz().expect("coiling") - 5.0).abs() < 1e-9 && m.roundness > 0.95, "{m:?}");
+    assert!(m.off_axis_from_s.is_some_and(|t| (t - 0.3).abs() < 1e-9), "{m:?}");
+    let folding = |t: f64| {
+        let along = if t < 0.3 { 0.0 } else { 0.6 * (TAU * 2.0 * (t - 0.3) + 0.3).sin() };
+        let across = 0.03 * (TAU * 7.0 * t).sin();
+        [0.8 * along - 0.6 * across, 0.6 * along + 0.8 * across]
+    };
+    let m = rope_motion(&foot_samples(folding)).expect("measured");
+    assert_eq!(m.pattern, Pattern::Folding, "{m:?}");
+    assert!(m.folds == 2 && m.roundness < 0.1, "{m:?}");
+    let folding_faster = |t: f64| folding(0.3 + 4.0 * (t - 0.3).max(0.0) / 2.0);
+    let m = rope_motion(&foot_samples(folding_faster)).expect("measured");
+    assert!(m.pattern == Pattern::Folding && m.folds == 4, "{m:?}");
+    assert!((m.frequency_hz().expect("folding") - 4.0 / 0.48).abs() < 1e-9, "{m:?}");
+    let m = rope_motion(&foot_samples(|t| [0.08 * (TAU * t).sin(), 0.0])).expect("measured");
+    assert_eq!(m.pattern, Pattern::Straight, "{m:?}");
+    let m = rope_motion(&foot_samples(|t| [0.15 * (TAU * t).sin(), 0.0])).expect("measured");
+    assert_eq!(m.pattern, Pattern::NearAxis, "{m:?}");
+    let half_turn = |t: f64| circling(t.min(0.4));
+    assert_eq!(rope_motion(&foot_samples(half_turn)).expect("measured").pattern, Pattern::Irregular);
+    let nothing = [coil::validation::jet_axis::AxisSample { time_s: 0.1, displacement_over_d: None }];
+    assert_eq!(rope_motion(&nothing), None);
 }

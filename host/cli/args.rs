@@ -185,7 +185,10 @@ pub enum Command {
     /// Measure in a run's frames how far a jet swings: the offset over D, frame by frame, of its
     /// axis just above the plate (the centroid of the downward flux between D/2 and 3D/2 above
     /// it) from the nozzle's axis, as `coil validate` judges buckling (above 0.5 D) and a straight
-    /// jet (below 0.1 D). For a run of one round, still, downward inlet, written as .vtu frames.
+    /// jet (below 0.1 D), with its direction; then what the rope's foot did: straight, folding
+    /// (back and forth through the axis), coiling (round it one way, with its turns and turns a
+    /// second) or irregular. For a run of one round, still, downward inlet, written as .vtu
+    /// frames.
     Axis {
         /// The run's output folder (it holds run.json and the .pvd series).
         dir: PathBuf,

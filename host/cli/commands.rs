@@ -8,15 +8,16 @@ use coil::output::write_atomically;
 use coil::run::{RunError, Summary};
 use coil::scene::{Scene, ViscousVelocity};
 use coil::validation::jet_axis::{AxisSample, JetAxis};
+use coil::validation::rope_motion::{rope_motion, Pattern, RopeMotion, OFF_AXIS, STRAIGHT_BELOW};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-/// Prints the axis offset at each frame's time and the largest; frames where nothing fell
-/// through the slab read "-".
+/// Prints the axis offset and its direction at each frame's time, the largest offset, and what
+/// the rope's foot did; frames where nothing fell through the slab read "-".
 pub fn print_axis(dir: &Path, axis: &JetAxis, offsets: &[AxisSample]) {
     let d = axis.diameter_m;
     println!(
-        "{}: jet axis offset over D = {d} m, from the nozzle axis x = {} m, z = {} m, of the downward flux {} to {} m above the plate at y = {} m",
+        "{}: jet axis offset over D = {d} m, from the nozzle axis x = {} m, z = {} m, of the downward flux {} to {} m above the plate at y = {} m; direction from +z towards +x (counter-clockwise seen from above)",
         dir.display(),
         axis.nozzle_xz_m[0],
         axis.nozzle_xz_m[1],
@@ -24,17 +25,39 @@ pub fn print_axis(dir: &Path, axis: &JetAxis, offsets: &[AxisSample]) {
         1.5 * d,
         axis.plate_y_m
     );
-    println!("t (s)      offset / D");
-    for &AxisSample { time_s: t, offset_over_d } in offsets {
-        match offset_over_d {
-            Some(o) => println!("{t:<10.6} {o:.6}"),
-            None => println!("{t:<10.6} -"),
+    println!("t (s)      offset / D  direction (deg)");
+    for sample in offsets {
+        match (sample.offset_over_d(), sample.angle_rad()) {
+            (Some(o), Some(a)) => println!("{:<10.6} {o:<11.6} {:>6.1}", sample.time_s, a.to_degrees()),
+            _ => println!("{:<10.6} -", sample.time_s),
         }
     }
-    let largest = offsets.iter().filter_map(|s| s.offset_over_d.map(|o| (s.time_s, o))).max_by(|a, b| a.1.total_cmp(&b.1));
-    match largest {
-        Some((t, o)) => println!("largest: {o:.4} D at t = {t:.6} s (straight below 0.1 D, buckled above 0.5 D)"),
-        None => println!("largest: none; no frame has fluid falling through the slab"),
+    let Some(motion) = rope_motion(offsets) else {
+        println!("largest: none; no frame has fluid falling through the slab");
+        return;
+    };
+    println!(
+        "largest: {:.4} D at t = {:.6} s (straight below {STRAIGHT_BELOW} D, buckled above 0.5 D)",
+        motion.largest_offset_over_d, motion.largest_at_s
+    );
+    println!("{}", describe_motion(&motion));
+}
+
+/// The pattern line of `coil axis`.
+fn describe_motion(m: &RopeMotion) -> String {
+    let Some(from) = m.off_axis_from_s else {
+        return format!("pattern: {}: never {OFF_AXIS} D off the axis", m.pattern);
+    };
+    let reading = format!(
+        "from t = {from:.3} s, {:.3} s: net {:+.2} turns ({:.2} either way; + is counter-clockwise seen from above), roundness {:.2}, {} crossings of the axis",
+        m.duration_s, m.turns, m.turns_either_way, m.roundness, m.folds
+    );
+    match (m.pattern, m.frequency_hz()) {
+        (Pattern::Coiling, Some(f)) => {
+            format!("pattern: coiling, {:.2} turns, {f:.2} turns a second ({:.3} s a turn); {reading}", m.turns.abs(), 1.0 / f)
+        }
+        (Pattern::Folding, Some(f)) => format!("pattern: folding, {f:.2} folds a second ({:.3} s a fold); {reading}", 1.0 / f),
+        (p, _) => format!("pattern: {p}; {reading}"),
     }
 }
 

@@ -72,6 +72,11 @@ impl JetAxis {
     /// the rope swings, and the pile it builds there barely moves. None while nothing falls
     /// there.
     pub fn offset(&self, particles: impl Iterator<Item = ([f64; 3], f64)>) -> Option<f64> {
+        self.displacement(particles).map(|[x, z]| x.hypot(z))
+    }
+
+    /// The same centroid's x and z from the nozzle axis (m).
+    pub fn displacement(&self, particles: impl Iterator<Item = ([f64; 3], f64)>) -> Option<[f64; 2]> {
         let d = self.diameter_m;
         let slab = (self.plate_y_m + 0.5 * d)..(self.plate_y_m + 1.5 * d);
         let (mut flux, mut x, mut z) = (0.0, 0.0, 0.0);
@@ -81,7 +86,7 @@ impl JetAxis {
             x += falling * (p[0] - self.nozzle_xz_m[0]);
             z += falling * (p[2] - self.nozzle_xz_m[1]);
         }
-        (flux > 0.0).then(|| (x * x + z * z).sqrt() / flux)
+        (flux > 0.0).then(|| [x / flux, z / flux])
     }
 }
 
@@ -90,8 +95,21 @@ impl JetAxis {
 pub struct AxisSample {
     /// Simulated time of the frame (s).
     pub time_s: f64,
-    /// [`JetAxis::offset`] over D; None where nothing fell through the slab.
-    pub offset_over_d: Option<f64>,
+    /// [`JetAxis::displacement`] over D, x then z; None where nothing fell through the slab.
+    pub displacement_over_d: Option<[f64; 2]>,
+}
+
+impl AxisSample {
+    /// [`JetAxis::offset`] over D.
+    pub fn offset_over_d(&self) -> Option<f64> {
+        self.displacement_over_d.map(|[x, z]| x.hypot(z))
+    }
+
+    /// The direction of the offset about the vertical (rad, -pi to pi): from +z towards +x, so
+    /// that it grows as the rope turns counter-clockwise seen from above (y up).
+    pub fn angle_rad(&self) -> Option<f64> {
+        self.displacement_over_d.map(|[x, z]| x.atan2(z))
+    }
 }
 
 /// The axis of the run in output folder `dir` and its offset at each `.vtu` frame. The scene is
@@ -110,7 +128,8 @@ pub fn offsets_in_run(dir: &Path) -> Result<(JetAxis, Vec<AxisSample>), String> 
         let frame = read_frame(&path)?;
         let velocity = frame.vectors.get("velocity").ok_or_else(|| format!("{}: holds no velocity", path.display()))?;
         let particles = frame.position.iter().zip(velocity).map(|(&p, v)| (p, f64::from(v[1])));
-        offsets.push(AxisSample { time_s: t, offset_over_d: axis.offset(particles).map(|o| o / axis.diameter_m) });
+        let displacement_over_d = axis.displacement(particles).map(|xz| xz.map(|c| c / axis.diameter_m));
+        offsets.push(AxisSample { time_s: t, displacement_over_d });
     }
     Ok((axis, offsets))
 }

@@ -6,6 +6,7 @@ pub mod hydrostatic;
 pub mod jet;
 pub mod jet_axis;
 pub mod poiseuille;
+pub mod rope_motion;
 pub mod snapshot;
 pub mod suite;
 pub mod taylor_green;
