@@ -236,3 +236,29 @@ fn a_safety_factor_above_one_is_refused_unless_overridden_and_then_scales_the_bo
     let (dt, _) = sim.next_dt();
     assert!((dt - 4.0 * bound).abs() < 1e-12 * bound, "{dt} against 4 x {bound}");
 }
+
+/// The ETA counts the particles a jet will add: a run at 1e6 particle-steps/s, 1000 particles
+/// and 1e-4 s steps with 0.5 s left takes 5 s as it stands, and 10 s if its fluid grows by
+/// 4000 particles a simulated second with room for all of them (the mean count over what is
+/// left is 2000), 7.1875 s if it fills at 1500 (0.125 s growing from 1000, then 0.375 s full).
+#[test]
+fn the_eta_counts_the_particles_a_jet_will_add() {
+    use coil::run::progress::{estimate, short_duration, ProgressSample};
+    let at = |wall_s: f64, time_s: f64, fluid_particles: usize| ProgressSample {
+        wall_s,
+        time_s,
+        steps: (time_s / 1e-4).round() as u64,
+        particle_steps: wall_s * 1e6,
+        fluid_particles,
+    };
+    let eta = |first, last, capacity| estimate(&first, &last, 0.8, capacity).expect("an estimate").remaining_s;
+    // 1e6 particle-steps/s at 1000 particles a step: 1000 steps a second, 0.1 simulated s.
+    let steady = eta(at(10.0, 0.2, 1000), at(11.0, 0.3, 1000), 10_000);
+    assert!((steady - 5.0).abs() < 1e-9, "{steady}");
+    let growing = eta(at(10.0, 0.2, 600), at(11.0, 0.3, 1000), 10_000);
+    assert!((growing - 10.0).abs() < 1e-9, "{growing}");
+    let filling = eta(at(10.0, 0.2, 600), at(11.0, 0.3, 1000), 1500);
+    assert!((filling - 7.1875).abs() < 1e-9, "{filling}");
+    assert_eq!(estimate(&at(10.0, 0.2, 1000), &at(10.0, 0.2, 1000), 0.8, 1000), None);
+    assert_eq!([short_duration(42.4), short_duration(185.0), short_duration(3725.0)], ["42s", "3m05s", "1h02m"]);
+}

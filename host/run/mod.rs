@@ -5,7 +5,7 @@ pub mod checkpoint;
 pub mod folder;
 mod frames;
 pub mod interrupt;
-mod progress;
+pub mod progress;
 pub mod run_log;
 pub mod summary;
 mod time_loop;

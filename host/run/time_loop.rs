@@ -110,7 +110,7 @@ fn drive<R: Real, M: Model<R>, B: Backend<R>>(
         save_checkpoint(&sim.run, &sim.host().particles, &mut tally)?;
     }
 
-    let mut progress = Progress::new(options.quiet, sim.run.time, sim.run.steps);
+    let mut progress = Progress::new(options.quiet);
     let stopped = |stop: StepError<B::Fault>, s: Summary| match stop {
         StepError::Unstable(instability) => RunError::Unstable(instability, Box::new(s)),
         StepError::Backend(e) => RunError::Device(e.to_string(), Box::new(s)),
@@ -141,7 +141,7 @@ fn drive<R: Real, M: Model<R>, B: Backend<R>>(
             tally.schedule_past(sim.run.time, every_s);
             save_checkpoint(&sim.run, &sim.host().particles, &mut tally)?;
         }
-        progress.report(&sim.run, end, clock.started.elapsed());
+        progress.report(&sim.run, end, clock.started.elapsed(), tally.particle_steps);
         if sim.settled() && options.stop.is_some_and(|stop| stop.load(Ordering::Relaxed)) {
             progress.finish();
             if let Err(stop) = sim.sync() {

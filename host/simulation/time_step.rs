@@ -34,6 +34,20 @@ impl fmt::Display for Limit {
     }
 }
 
+impl Limit {
+    /// One word for the progress line.
+    pub fn short(&self) -> &'static str {
+        match self {
+            Limit::Acoustic => "acoustic",
+            Limit::Viscous => "viscous",
+            Limit::Velocity => "velocity",
+            Limit::Fixed => "fixed",
+            Limit::Cfl => "CFL",
+            Limit::Largest => "largest",
+        }
+    }
+}
+
 /// Eq. (10): dt <= 0.1 min(h / c, h^2 / (8 nu0)).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StabilityBound {
