@@ -3,10 +3,16 @@
 mod cli;
 
 use clap::Parser;
-use cli::args::{BenchBackendArg, Cli, ColorArg, Command, Execution, PrecisionArg, ViewArg};
+use cli::args::{
+    BenchBackendArg, CameraArg, Cli, ColorArg, Command, Execution, MeshFormatArg, PrecisionArg, RenderColorArg, ViewArg,
+};
 use cli::commands::{bench_command, finish_run, list_scenes, preview, print_axis, tradeoff_command};
+use cli::render::{render_command, RenderColor, RenderOptions};
+use cli::surface::{surface_command, SurfaceOptions};
 use coil::bench::{cuda_available, table_row, BenchBackend, BenchOptions};
 use coil::output::preview::{Coloring, View};
+use coil::output::render::Camera;
+use coil::output::surface::MeshFormat;
 use coil::run::{resume, run, ResumeOptions, RunOptions};
 use coil::scene::check::check;
 use coil::scene::overrides::Override;
@@ -49,6 +55,41 @@ fn command(command: Command) -> Result<ExitCode, String> {
             let (axis, offsets) = offsets_in_run(&dir)?;
             print_axis(&dir, &axis, &offsets);
             Ok(ExitCode::SUCCESS)
+        }
+        Command::Surface { path, cube_size, support_radius, iso, format, threads, quiet } => {
+            set_threads(threads)?;
+            let formats: &'static [MeshFormat] =
+                match (format.contains(&MeshFormatArg::Ply), format.contains(&MeshFormatArg::Obj)) {
+                    (true, true) => &[MeshFormat::Ply, MeshFormat::Obj],
+                    (false, true) => &[MeshFormat::Obj],
+                    _ => &[MeshFormat::Ply],
+                };
+            let options = SurfaceOptions { cube_size, support_radius, iso_threshold: iso, formats, quiet };
+            surface_command(&path, &options).map(|()| ExitCode::SUCCESS)
+        }
+        Command::Render { path, views, color, range, size, delay, threads, quiet } => {
+            set_threads(threads)?;
+            let cameras = views
+                .iter()
+                .map(|v| match v {
+                    CameraArg::Front => Camera::Front,
+                    CameraArg::Side => Camera::Side,
+                    CameraArg::Top => Camera::Top,
+                    CameraArg::Oblique => Camera::Oblique,
+                })
+                .collect();
+            let color = match color {
+                RenderColorArg::Auto => RenderColor::Auto,
+                RenderColorArg::Viscosity => RenderColor::Viscosity,
+                RenderColorArg::Speed => RenderColor::Speed,
+            };
+            let range = match range.as_deref() {
+                None => None,
+                Some(&[min, max]) if min < max => Some((min, max)),
+                Some(r) => return Err(format!("--range: expected MIN,MAX with MIN < MAX, got {r:?}")),
+            };
+            let options = RenderOptions { cameras, color, range, size, movie_delay_cs: delay, quiet };
+            render_command(&path, &options).map(|()| ExitCode::SUCCESS)
         }
         Command::Tradeoff { quick, repeats, out } => tradeoff_command(quick, repeats as usize, &out).map(|()| ExitCode::SUCCESS),
         Command::Validate { quick, only, out } => {

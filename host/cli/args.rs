@@ -94,6 +94,60 @@ pub enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
+    /// Reconstruct the free surface of a run's frames (marching cubes over an SPH density field,
+    /// splashsurf) and write each mesh beside its frame as frame_NNNN.surface.ply (binary, with
+    /// normals and the fluid's viscosity in m^2/s and speed in m/s at each vertex) or .obj.
+    Surface {
+        /// A run's output folder (every frame of its series) or one .vtu frame.
+        path: PathBuf,
+        /// Marching-cubes edge, in particle spacings.
+        #[arg(long, default_value_t = 0.5)]
+        cube_size: f64,
+        /// Support radius of the density field's kernel, in the run's h.
+        #[arg(long, default_value_t = 1.0)]
+        support_radius: f64,
+        /// The surface is where the density field reaches this fraction of rho0.
+        #[arg(long, default_value_t = 0.6)]
+        iso: f64,
+        /// Mesh formats (comma-separated).
+        #[arg(long, value_enum, value_delimiter = ',', default_value = "ply")]
+        format: Vec<MeshFormatArg>,
+        /// Worker threads [default: all cores].
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Print only the result.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Draw the free surface of a run's frames from fixed cameras (front, side, top and oblique),
+    /// shaded and coloured by viscosity (m^2/s) or speed (m/s), with the time, the plate, a
+    /// scale bar and a colour bar: frame_NNNN.render.png beside each frame and, for a run's
+    /// folder, the movie render.gif.
+    Render {
+        /// A run's output folder (every frame of its series) or one .vtu frame.
+        path: PathBuf,
+        /// Cameras, left to right (comma-separated).
+        #[arg(long, value_enum, value_delimiter = ',', default_value = "front,side,top,oblique")]
+        views: Vec<CameraArg>,
+        /// What the colours show [default: viscosity for a Cross fluid, speed otherwise].
+        #[arg(long, value_enum, default_value = "auto")]
+        color: RenderColorArg,
+        /// Colour range MIN,MAX [default: nu_inf to nu0, or 0 to the run's top speed].
+        #[arg(long, value_delimiter = ',', value_name = "MIN,MAX")]
+        range: Option<Vec<f64>>,
+        /// Pixels per panel side.
+        #[arg(long, default_value_t = 400)]
+        size: usize,
+        /// Hundredths of a second each frame shows in the movie.
+        #[arg(long, default_value_t = 8)]
+        delay: u16,
+        /// Worker threads [default: all cores].
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Print only the result.
+        #[arg(long)]
+        quiet: bool,
+    },
     /// Validate a scene and say what it will cost: particle counts, h, the Eq. (10) bound and
     /// its limiting term, memory, and the wall time estimated from a short calibration run.
     Check {
@@ -199,6 +253,27 @@ pub enum Command {
         #[arg(default_value = "scenes")]
         dir: PathBuf,
     },
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum CameraArg {
+    Front,
+    Side,
+    Top,
+    Oblique,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum RenderColorArg {
+    Auto,
+    Viscosity,
+    Speed,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum MeshFormatArg {
+    Ply,
+    Obj,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]

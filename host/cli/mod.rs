@@ -2,3 +2,5 @@
 
 pub mod args;
 pub mod commands;
+pub mod render;
+pub mod surface;

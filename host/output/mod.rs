@@ -5,6 +5,8 @@ pub mod frame;
 pub mod image;
 pub mod plot;
 pub mod preview;
+pub mod render;
+pub mod surface;
 
 pub mod points;
 pub mod vtu;

@@ -21,7 +21,7 @@ pub enum View {
 
 /// Viridis, sampled at five points: dark purple (low) to yellow (high), as in the paper's
 /// viscosity figures.
-fn colormap(t: f64) -> [u8; 3] {
+pub fn colormap(t: f64) -> [u8; 3] {
     const STOPS: [[f64; 3]; 5] =
         [[68.0, 1.0, 84.0], [59.0, 82.0, 139.0], [33.0, 145.0, 140.0], [94.0, 201.0, 98.0], [253.0, 231.0, 37.0]];
     let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 };
