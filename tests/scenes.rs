@@ -479,6 +479,23 @@ fn an_output_folder_that_cannot_be_created_exits_2_naming_it() {
     std::fs::remove_file(&file).ok();
 }
 
+/// `coil scenes` prints each variant's command with an output folder of its own, named after
+/// the scene and the variant, so that running one variant after another is not refused.
+#[test]
+fn coil_scenes_gives_each_variant_its_own_output_folder() {
+    let out = common::coil(&["scenes", concat!(env!("CARGO_MANIFEST_DIR"), "/scenes")]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let printed = String::from_utf8_lossy(&out.stdout);
+    let folders: Vec<&str> = printed.lines().filter_map(|l| l.split(" --out ").nth(1)).collect();
+    assert!(folders.contains(&"out/round_jet-paper") && folders.contains(&"out/newtonian_jet-paper"), "{printed}");
+    let mut unique = folders.clone();
+    unique.sort();
+    unique.dedup();
+    assert_eq!(unique.len(), folders.len(), "{printed}");
+    let runs = printed.lines().filter(|l| l.trim_start().starts_with("coil run ")).count();
+    assert_eq!(runs, folders.len(), "{printed}");
+}
+
 /// `coil scenes | head -1`: once the reader of stdout has gone, coil ends as Unix filters do
 /// (by SIGPIPE), never with a panic. The read end is closed before coil starts, so its first
 /// line meets the closed pipe every time.

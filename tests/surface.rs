@@ -144,8 +144,9 @@ fn a_render_shows_the_surface_over_the_plate() {
     assert_eq!(at(5, 28 + 100), [255, 255, 255]);
 }
 
-/// `coil surface` and `coil render` on a short run: a mesh and a picture beside every frame, a
-/// looping GIF with one picture a frame; bad input exits 2 naming what is wrong.
+/// `coil surface` and `coil render` on a short run, whose summary names them: a mesh and a
+/// picture beside every frame, a looping GIF with one picture a frame; bad input exits 2 naming
+/// what is wrong.
 #[test]
 fn surface_and_render_commands_write_beside_the_frames() {
     let out = std::env::temp_dir().join(format!("coil-surface-{}", std::process::id()));
@@ -166,6 +167,10 @@ fn surface_and_render_commands_write_beside_the_frames() {
         "output.every_s=0.02",
     ]);
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    // The summary says what to run next, and how the run's compression and Mach number stand.
+    let summary = String::from_utf8_lossy(&run.stdout);
+    assert!(summary.contains(&format!("next: coil render {out_arg}")) && !summary.contains("coil axis"), "{summary}");
+    assert!(summary.contains("the usual aim of 0.01") && summary.contains("the usual aim of 0.1;"), "{summary}");
     let frames: Vec<_> = ["frame_000000", "frame_000001", "frame_000002"].map(|f| out.join(f)).into();
     let surface = common::coil(&["surface", out_arg, "--quiet", "--format", "ply,obj"]);
     assert!(surface.status.success(), "{}", String::from_utf8_lossy(&surface.stderr));

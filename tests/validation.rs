@@ -322,6 +322,7 @@ fn coil_axis_measures_in_the_frames_what_validate_measures_as_the_jet_runs() {
         "simulation.end_time_s=0.1",
     ]);
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(String::from_utf8_lossy(&run.stdout).contains(&format!("coil axis {out_arg}")), "the summary names coil axis");
     let axis = common::coil(&["axis", out_arg]);
     assert!(axis.status.success(), "{}", String::from_utf8_lossy(&axis.stderr));
     let printed = String::from_utf8_lossy(&axis.stdout);

@@ -61,6 +61,12 @@ fn describe_motion(m: &RopeMotion) -> String {
     }
 }
 
+/// Whether the run in `dir` is one `coil axis` reads: one round, still jet falling onto a plate.
+fn is_round_jet(dir: &Path) -> bool {
+    let log = dir.join(coil::run::folder::LOG);
+    Scene::load_with(&log, &[]).is_ok_and(|scene| JetAxis::of(&scene, "run.json").is_ok())
+}
+
 /// Prints how a run or a resumed run ended, and its exit code: 0 done, 2 bad input, 1 output
 /// or device failure, 3 unstable, 130 interrupted.
 pub fn finish_run(result: Result<Summary, RunError>, out_dir: &Path) -> ExitCode {
@@ -68,7 +74,16 @@ pub fn finish_run(result: Result<Summary, RunError>, out_dir: &Path) -> ExitCode
         Ok(summary) => {
             println!("{summary}");
             match &summary.series {
-                Some(series) => println!("frames in {} (open {} in ParaView)", out_dir.display(), series.display()),
+                Some(series) => {
+                    println!("frames in {} (open {} in ParaView)", out_dir.display(), series.display());
+                    println!("next: coil render {} (pictures of the surface and a movie)", out_dir.display());
+                    if is_round_jet(out_dir) {
+                        println!(
+                            "      coil axis {} (how far the jet buckled, and whether it coiled or folded)",
+                            out_dir.display()
+                        );
+                    }
+                }
                 None => println!("frames in {}", out_dir.display()),
             }
             ExitCode::SUCCESS
@@ -171,7 +186,16 @@ pub fn list_scenes(dir: &Path) -> Result<ExitCode, String> {
                 println!("{:<32} {}", path.display(), scene.description);
                 for v in &scene.variants {
                     let sets: String = v.set.iter().map(|s| format!(" --set {s}")).collect();
-                    println!("  {:<30} {}\n  {:<30} coil run {}{sets}", v.name, v.description, "", path.display());
+                    // Its own folder, so that variants of one scene do not refuse each other's.
+                    let out = Path::new("out").join(format!("{}-{}", scene.name, v.name));
+                    println!(
+                        "  {:<30} {}\n  {:<30} coil run {}{sets} --out {}",
+                        v.name,
+                        v.description,
+                        "",
+                        path.display(),
+                        out.display()
+                    );
                 }
             }
             Err(e) => {

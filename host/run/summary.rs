@@ -4,6 +4,11 @@
 use std::fmt;
 use std::path::PathBuf;
 
+/// The usual aims of weakly compressible SPH (Monaghan 1994): the flow at most a tenth of the
+/// sound speed, so that the density strays about 1 % (it goes as Mach squared).
+pub const MACH_AIM: f64 = 0.1;
+pub const COMPRESSION_AIM: f64 = 0.01;
+
 /// What a run did, printed at its end.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Summary {
@@ -56,8 +61,29 @@ impl fmt::Display for Summary {
         writeln!(f, "wall time              {:.2} s", self.wall_s)?;
         writeln!(f, "particle-steps/s       {:.3e}", self.particle_steps_per_s)?;
         writeln!(f, "particles              {} fluid, {} boundary", self.fluid_particles, self.boundary_particles)?;
-        writeln!(f, "max compression        {:.3e} ((rho-rho0)/rho0)", self.max_compression)?;
-        writeln!(f, "max speed              {:.4} m/s (Mach {:.3})", self.max_speed_m_s, self.max_mach)?;
+        let within = |value: f64, aim: f64| if value <= aim { "within" } else { "above" };
+        if self.density_solve.is_some() {
+            writeln!(
+                f,
+                "max compression        {:.3e} ((rho-rho0)/rho0) of a single particle; the density solve holds the fluid's mean to its tolerance",
+                self.max_compression
+            )?;
+            writeln!(f, "max speed              {:.4} m/s (pressure solved: no sound speed)", self.max_speed_m_s)?;
+        } else {
+            writeln!(
+                f,
+                "max compression        {:.3e} ((rho-rho0)/rho0): {} the usual aim of {COMPRESSION_AIM} for weakly compressible SPH",
+                self.max_compression,
+                within(self.max_compression, COMPRESSION_AIM)
+            )?;
+            writeln!(
+                f,
+                "max speed              {:.4} m/s (Mach {:.3}: {} the usual aim of {MACH_AIM}; a higher sound speed lowers both, at a shorter dt)",
+                self.max_speed_m_s,
+                self.max_mach,
+                within(self.max_mach, MACH_AIM)
+            )?;
+        }
         writeln!(f, "removed (left domain)  {}", self.removed)?;
         let solves = [
             ("implicit viscosity", &self.implicit_viscosity),
