@@ -7,6 +7,7 @@ use cli::args::{
     BenchBackendArg, CameraArg, Cli, ColorArg, Command, Execution, MeshFormatArg, PrecisionArg, RenderColorArg, ViewArg,
 };
 use cli::commands::{bench_command, finish_run, list_scenes, preview, print_axis, tradeoff_command};
+use cli::pov::{pov_command, PovOptions};
 use cli::render::{render_command, RenderColor, RenderOptions};
 use cli::surface::{surface_command, SurfaceOptions};
 use coil::bench::{cuda_available, table_row, BenchBackend, BenchOptions};
@@ -90,6 +91,19 @@ fn command(command: Command) -> Result<ExitCode, String> {
             };
             let options = RenderOptions { cameras, color, range, size, movie_delay_cs: delay, quiet };
             render_command(&path, &options).map(|()| ExitCode::SUCCESS)
+        }
+        Command::Pov { path, render, size, color, threads } => {
+            set_threads(threads)?;
+            let size = match size.as_slice() {
+                &[w, h] if (16..=8192).contains(&w) && (16..=8192).contains(&h) => (w, h),
+                s => return Err(format!("--size: expected WIDTH,HEIGHT, each 16 to 8192 pixels, got {s:?}")),
+            };
+            let by_viscosity = match color {
+                RenderColorArg::Auto => None,
+                RenderColorArg::Viscosity => Some(true),
+                RenderColorArg::Speed => Some(false),
+            };
+            pov_command(&path, &PovOptions { render: render.then_some(size), by_viscosity }).map(|()| ExitCode::SUCCESS)
         }
         Command::Tradeoff { quick, repeats, out } => tradeoff_command(quick, repeats as usize, &out).map(|()| ExitCode::SUCCESS),
         Command::Validate { quick, only, out } => {

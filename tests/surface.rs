@@ -144,9 +144,9 @@ fn a_render_shows_the_surface_over_the_plate() {
     assert_eq!(at(5, 28 + 100), [255, 255, 255]);
 }
 
-/// `coil surface` and `coil render` on a short run, whose summary names them: a mesh and a
-/// picture beside every frame, a looping GIF with one picture a frame; bad input exits 2 naming
-/// what is wrong.
+/// `coil surface`, `coil render` and `coil pov` on a short run, whose summary names render: a
+/// mesh, a picture and a POV-Ray scene beside every frame, a looping GIF with one picture a
+/// frame; bad input exits 2 naming what is wrong.
 #[test]
 fn surface_and_render_commands_write_beside_the_frames() {
     let out = std::env::temp_dir().join(format!("coil-surface-{}", std::process::id()));
@@ -185,6 +185,12 @@ fn surface_and_render_commands_write_beside_the_frames() {
         let png = std::fs::read(f.with_extension("render.png")).expect("a picture");
         assert_eq!(&png[1..4], b"PNG");
     }
+    let pov = common::coil(&["pov", out_arg]);
+    assert!(pov.status.success(), "{}", String::from_utf8_lossy(&pov.stderr));
+    for f in &frames {
+        let scene = std::fs::read_to_string(f.with_extension("pov")).expect("a POV-Ray scene");
+        assert!(scene.contains("blob {") && scene.contains("camera {"), "{}", f.display());
+    }
     let gif = std::fs::read(out.join("render.gif")).expect("the movie");
     assert_eq!(&gif[..6], b"GIF89a");
     let pictures = gif.windows(2).filter(|w| w == &[0x21, 0xF9]).count();
@@ -194,6 +200,7 @@ fn surface_and_render_commands_write_beside_the_frames() {
         (vec!["surface", out_arg, "--cube-size", "0"], "--cube-size"),
         (vec!["render", out_arg, "--size", "10"], "--size"),
         (vec!["render", out_arg, "--range", "2,1"], "--range"),
+        (vec!["pov", out_arg, "--size", "10,10"], "--size"),
     ] {
         let bad = common::coil(&args);
         let stderr = String::from_utf8_lossy(&bad.stderr);
@@ -201,4 +208,58 @@ fn surface_and_render_commands_write_beside_the_frames() {
         assert!(stderr.contains(named) && !stderr.contains("panicked"), "{args:?}: {stderr}");
     }
     std::fs::remove_dir_all(&out).ok();
+}
+
+/// The POV-Ray scene of the ball: one blob holding a sphere component of radius h per
+/// particle, each with its own colour, the plate as a box, a camera and lights, every brace
+/// closed. Where `povray` is installed (Debian: povray) it must render the scene; elsewhere
+/// only the syntax above is checked.
+#[test]
+fn the_pov_scene_has_a_blob_component_per_particle_and_renders() {
+    use coil::output::pov::PovStage;
+    let frame = ball();
+    let half = (RADIUS + 2.0) * SPACING;
+    let stage = PovStage {
+        min_m: [CENTRE[0] - half, CENTRE[1] - half, CENTRE[2] - half],
+        max_m: [CENTRE[0] + half, CENTRE[1] + half, CENTRE[2] + half],
+        plate: Some((CENTRE[1] - half, 2.0 * SPACING)),
+        radius_m: 2.0 * SPACING,
+        range: (0.0, 0.1),
+    };
+    let viscosity = &frame.scalars["viscosity"];
+    let pov = stage.scene(&frame.position, viscosity, 0.5);
+    assert!(pov.contains("#version 3.7;") && pov.contains("camera {") && pov.contains("light_source {"));
+    assert_eq!(pov.matches("blob {").count(), 1);
+    assert_eq!(pov.matches("box {").count(), 1);
+    assert_eq!(pov.matches("  sphere {").count(), frame.position.len());
+    assert_eq!(pov.matches(&format!(", {:.6}, 1 texture", 2.0 * SPACING)).count(), frame.position.len());
+    let mut depth = 0i64;
+    for c in pov.chars() {
+        depth += match c {
+            '{' => 1,
+            '}' => -1,
+            _ => 0,
+        };
+        assert!(depth >= 0, "a brace closed before it opened");
+    }
+    assert_eq!(depth, 0, "unclosed braces");
+    let dir = std::env::temp_dir().join(format!("coil-pov-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a temporary folder");
+    let (scene, png) = (dir.join("ball.pov"), dir.join("ball.png"));
+    std::fs::write(&scene, &pov).expect("written");
+    let rendered = std::process::Command::new("povray")
+        .args([format!("+I{}", scene.display()), format!("+O{}", png.display())])
+        .args(["+W64", "+H48", "-D", "+FN"])
+        .output();
+    match rendered {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            eprintln!("povray is not installed: the scene's syntax checked only")
+        }
+        Err(e) => panic!("povray: {e}"),
+        Ok(o) => {
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            assert_eq!(&std::fs::read(&png).expect("the picture")[1..4], b"PNG");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }

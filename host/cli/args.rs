@@ -148,6 +148,25 @@ pub enum Command {
         #[arg(long)]
         quiet: bool,
     },
+    /// Write a POV-Ray scene beside each frame as the paper renders its figures: the fluid one
+    /// blob, a component of radius h per particle coloured by viscosity (or speed), the plate, a
+    /// camera fixed across the run; with --render, render each with povray where installed.
+    Pov {
+        /// A run's output folder (every frame of its series) or one .vtu frame.
+        path: PathBuf,
+        /// Render each scene with povray to frame_NNNNNN.pov.png.
+        #[arg(long)]
+        render: bool,
+        /// Picture size WIDTH,HEIGHT for --render.
+        #[arg(long, value_delimiter = ',', value_name = "WIDTH,HEIGHT", default_value = "800,600")]
+        size: Vec<u32>,
+        /// What the colours show [default: viscosity for a Cross fluid, speed otherwise].
+        #[arg(long, value_enum, default_value = "auto")]
+        color: RenderColorArg,
+        /// Worker threads [default: all cores].
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// Validate a scene and say what it will cost: particle counts, h, the Eq. (10) bound and
     /// its limiting term, memory, and the wall time estimated from a short calibration run.
     Check {

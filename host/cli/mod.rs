@@ -2,5 +2,6 @@
 
 pub mod args;
 pub mod commands;
+pub mod pov;
 pub mod render;
 pub mod surface;

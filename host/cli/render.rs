@@ -139,7 +139,7 @@ pub fn render_command(path: &Path, options: &RenderOptions) -> Result<(), String
 }
 
 /// Each frame's simulated time (s): from the run's series where it lists the frame, else 0.
-fn frame_times(dir: &Path, scene: &Scene, frames: &[PathBuf]) -> Result<Vec<f64>, String> {
+pub fn frame_times(dir: &Path, scene: &Scene, frames: &[PathBuf]) -> Result<Vec<f64>, String> {
     let series = read_series(&series_path(dir, &scene.name)).unwrap_or_default();
     Ok(frames
         .iter()

@@ -9,6 +9,7 @@ pub mod render;
 pub mod surface;
 
 pub mod points;
+pub mod pov;
 pub mod vtu;
 pub mod vtu_read;
 
