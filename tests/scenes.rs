@@ -139,8 +139,8 @@ fn bad_scenes_exit_2_naming_file_and_field() {
 }
 
 /// A second run into a folder holding an earlier one is refused, leaving it as it was; with
-/// `--overwrite` the earlier run's files go (no stale frame past the new run's last survives)
-/// and the user's own files stay.
+/// `--overwrite` the earlier run's files go (no stale frame past the new run's last survives,
+/// nor the meshes, pictures and movie drawn from its frames) and the user's own files stay.
 #[test]
 fn an_earlier_run_is_kept_unless_overwrite_is_given() {
     let dir = std::env::temp_dir().join(format!("coil-overwrite-{}", std::process::id()));
@@ -161,9 +161,15 @@ fn an_earlier_run_is_kept_unless_overwrite_is_given() {
     assert_eq!(again.status.code(), Some(2), "{message}");
     assert!(message.contains("--out") && message.contains("earlier run") && message.contains("--overwrite"), "{message}");
     assert_eq!(std::fs::read(out.join("frame_000002.vtu")).expect("kept"), frame, "the refused run touched the folder");
+    for derived in ["frame_000002.surface.ply", "frame_000002.render.png", "frame_000002.pov", "render.gif"] {
+        std::fs::write(out.join(derived), "drawn from the earlier run").expect("written");
+    }
     let replaced = run("simulation.end_time_s=0.002", &["--overwrite"]);
     assert!(replaced.status.success(), "{}", String::from_utf8_lossy(&replaced.stderr));
     assert!(!out.join("frame_000002.vtu").exists(), "a stale frame of the earlier run survived");
+    for derived in ["frame_000002.surface.ply", "frame_000002.render.png", "frame_000002.pov", "render.gif"] {
+        assert!(!out.join(derived).exists(), "{derived}, drawn from the earlier run, survived");
+    }
     assert!(out.join("frame_000001.vtu").is_file());
     assert_eq!(std::fs::read_to_string(out.join("notes.txt")).expect("the user's file"), "mine");
     std::fs::remove_dir_all(&dir).ok();

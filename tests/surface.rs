@@ -1,7 +1,7 @@
 //! The free surface: meshes of a frame's fluid, and the pictures and movie drawn from them.
 
 use coil::output::render::{Camera, Stage};
-use coil::output::surface::{reconstruct, SurfaceMesh, SurfaceParameters};
+use coil::output::surface::{reconstruct, Fluid, SurfaceMesh, SurfaceParameters};
 use coil::output::vtu_read::FrameData;
 use std::collections::{BTreeMap, HashMap};
 
@@ -39,7 +39,8 @@ fn ball() -> FrameData {
 
 fn mesh_of_ball() -> SurfaceMesh {
     let parameters = SurfaceParameters::for_run(SPACING, 2.0 * SPACING, 1000.0);
-    reconstruct(&ball(), &parameters).expect("a surface")
+    let frame = ball();
+    reconstruct(Fluid::of(&frame).expect("a fluid"), &parameters).expect("a surface")
 }
 
 fn from_centre(v: [f32; 3]) -> [f64; 3] {
@@ -145,7 +146,8 @@ fn a_render_shows_the_surface_over_the_plate() {
 }
 
 /// `coil surface`, `coil render` and `coil pov` on a short run, whose summary names render: a
-/// mesh, a picture and a POV-Ray scene beside every frame, a looping GIF with one picture a
+/// mesh (the same as the run's own with `output.formats` "surface"), a picture and a POV-Ray
+/// scene beside every frame, a looping GIF with one picture a
 /// frame; bad input exits 2 naming what is wrong.
 #[test]
 fn surface_and_render_commands_write_beside_the_frames() {
@@ -165,6 +167,8 @@ fn surface_and_render_commands_write_beside_the_frames() {
         "simulation.end_time_s=0.04",
         "--set",
         "output.every_s=0.02",
+        "--set",
+        "output.formats=[\"vtu\",\"surface\"]",
     ]);
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     // The summary says what to run next, and how the run's compression and Mach number stand.
@@ -172,12 +176,14 @@ fn surface_and_render_commands_write_beside_the_frames() {
     assert!(summary.contains(&format!("next: coil render {out_arg}")) && !summary.contains("coil axis"), "{summary}");
     assert!(summary.contains("the usual aim of 0.01") && summary.contains("the usual aim of 0.1;"), "{summary}");
     let frames: Vec<_> = ["frame_000000", "frame_000001", "frame_000002"].map(|f| out.join(f)).into();
+    // Meshed as the run writes each frame, and again from the frame read back: the same mesh.
+    let during_run: Vec<Vec<u8>> =
+        frames.iter().map(|f| std::fs::read(f.with_extension("surface.ply")).expect("a mesh")).collect();
     let surface = common::coil(&["surface", out_arg, "--quiet", "--format", "ply,obj"]);
     assert!(surface.status.success(), "{}", String::from_utf8_lossy(&surface.stderr));
-    for f in &frames {
-        for ext in ["surface.ply", "surface.obj"] {
-            assert!(f.with_extension(ext).is_file(), "{}", f.with_extension(ext).display());
-        }
+    for (f, meshed) in frames.iter().zip(&during_run) {
+        assert!(f.with_extension("surface.obj").is_file(), "{}", f.display());
+        assert_eq!(&std::fs::read(f.with_extension("surface.ply")).expect("a mesh"), meshed, "{}", f.display());
     }
     let render = common::coil(&["render", out_arg, "--quiet", "--size", "96", "--views", "front,oblique"]);
     assert!(render.status.success(), "{}", String::from_utf8_lossy(&render.stderr));

@@ -3,10 +3,10 @@
 
 use super::surface::frames_of;
 use coil::output::render::{Camera, Stage};
-use coil::output::surface::{reconstruct, SurfaceMesh, SurfaceParameters};
+use coil::output::surface::{reconstruct, Fluid, SurfaceMesh, SurfaceParameters};
 use coil::output::vtu_read::{read_frame, read_series};
 use coil::output::write_atomically;
-use coil::run::folder::{series_path, LOG};
+use coil::run::folder::{series_path, LOG, MOVIE};
 use coil::scene::{Boundary, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
@@ -90,7 +90,9 @@ pub fn render_command(path: &Path, options: &RenderOptions) -> Result<(), String
         .par_iter()
         .map(|file| {
             let frame = read_frame(file)?;
-            let mesh = reconstruct(&frame, &parameters).map_err(|e| format!("{}: {e}", file.display()))?;
+            let mesh = Fluid::of(&frame)
+                .and_then(|fluid| reconstruct(fluid, &parameters))
+                .map_err(|e| format!("{}: {e}", file.display()))?;
             bar.inc(1);
             Ok(mesh)
         })
@@ -152,7 +154,7 @@ pub fn frame_times(dir: &Path, scene: &Scene, frames: &[PathBuf]) -> Result<Vec<
 
 /// The pictures as an animated GIF, `render.gif` in `dir`, looping.
 fn write_movie(dir: &Path, pictures: &[(PathBuf, coil::output::image::Image)], delay_cs: u16) -> Result<PathBuf, String> {
-    let path = dir.join("render.gif");
+    let path = dir.join(MOVIE);
     let Some((_, first)) = pictures.first() else { return Ok(path) };
     let (w, h) = (u16::try_from(first.width), u16::try_from(first.height));
     let (Ok(w), Ok(h)) = (w, h) else { return Err("--size: the pictures are too large for a GIF".into()) };

@@ -1,6 +1,6 @@
 //! `coil surface`: the free-surface mesh of each frame of a run, written beside the frame.
 
-use coil::output::surface::{mesh_path, reconstruct, MeshFormat, SurfaceParameters};
+use coil::output::surface::{mesh_path, reconstruct, Fluid, MeshFormat, SurfaceParameters};
 use coil::output::vtu_read::{read_frame, read_series};
 use coil::output::write_atomically;
 use coil::run::folder::{series_path, LOG};
@@ -69,7 +69,9 @@ pub fn surface_command(path: &Path, options: &SurfaceOptions) -> Result<(), Stri
         .par_iter()
         .map(|frame_file| {
             let frame = read_frame(frame_file)?;
-            let mesh = reconstruct(&frame, &parameters).map_err(|e| format!("{}: {e}", frame_file.display()))?;
+            let mesh = Fluid::of(&frame)
+                .and_then(|fluid| reconstruct(fluid, &parameters))
+                .map_err(|e| format!("{}: {e}", frame_file.display()))?;
             for &format in options.formats {
                 let out = mesh_path(frame_file, format);
                 let bytes = match format {

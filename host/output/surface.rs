@@ -53,13 +53,39 @@ pub struct SurfaceMesh {
     pub triangles: Vec<[u32; 3]>,
 }
 
-/// The surface of `frame`'s fluid; an empty mesh where the frame has no fluid.
-pub fn reconstruct(frame: &FrameData, p: &SurfaceParameters) -> Result<SurfaceMesh, String> {
-    if frame.position.is_empty() {
+/// The fluid particles a surface is made from.
+#[derive(Debug, Clone, Copy)]
+pub struct Fluid<'a> {
+    /// m
+    pub position: &'a [[f64; 3]],
+    /// kg/m^3
+    pub density: &'a [f32],
+    /// m^2/s
+    pub viscosity: &'a [f32],
+    /// m/s
+    pub velocity: &'a [[f32; 3]],
+}
+
+impl<'a> Fluid<'a> {
+    /// The fluid of a frame read back; its arrays must be there.
+    pub fn of(frame: &'a FrameData) -> Result<Self, String> {
+        let scalar = |name: &str| frame.scalars.get(name).map(Vec::as_slice).ok_or(format!("the frame has no {name} array"));
+        Ok(Fluid {
+            position: &frame.position,
+            density: scalar("density")?,
+            viscosity: scalar("viscosity")?,
+            velocity: frame.vectors.get("velocity").map(Vec::as_slice).ok_or("the frame has no velocity array")?,
+        })
+    }
+}
+
+/// The surface of `fluid`; an empty mesh where there is no fluid.
+pub fn reconstruct(fluid: Fluid<'_>, p: &SurfaceParameters) -> Result<SurfaceMesh, String> {
+    if fluid.position.is_empty() {
         return Ok(SurfaceMesh::default());
     }
     let positions: Vec<Vector3<f32>> =
-        frame.position.iter().map(|x| Vector3::new(x[0] as f32, x[1] as f32, x[2] as f32)).collect();
+        fluid.position.iter().map(|x| Vector3::new(x[0] as f32, x[1] as f32, x[2] as f32)).collect();
     let mut parameters = Parameters::new(p.particle_radius_m as f32, p.support_radius_m as f32, p.cube_size_m as f32);
     parameters.rest_density = p.rest_density as f32;
     parameters.iso_surface_threshold = p.iso_threshold as f32;
@@ -68,19 +94,15 @@ pub fn reconstruct(frame: &FrameData, p: &SurfaceParameters) -> Result<SurfaceMe
     parameters.spatial_decomposition = SpatialDecomposition::None;
     let surface = reconstruct_surface::<i64, f32>(&positions, &parameters).map_err(|e| format!("surface reconstruction: {e}"))?;
     let mesh = surface.mesh;
-    let density = frame.scalars.get("density").ok_or("the frame has no density array")?;
-    let interpolator = SphInterpolator::new(&positions, density, p.particle_mass as f32, p.support_radius_m as f32);
+    u32::try_from(mesh.vertices.len()).map_err(|_| "more than 2^32 vertices".to_string())?;
+    let interpolator = SphInterpolator::new(&positions, fluid.density, p.particle_mass as f32, p.support_radius_m as f32);
     let normals = interpolator.interpolate_normals(&mesh.vertices);
     let field = |values: &[f32]| interpolator.interpolate_scalar_quantity(values, &mesh.vertices, true);
-    let viscosity = frame.scalars.get("viscosity").map(|v| field(v)).unwrap_or_else(|| vec![0.0; mesh.vertices.len()]);
-    let speed = frame.vectors.get("velocity").map(|v| field(&crate::output::preview::speeds(v)));
-    let vertex_count = u32::try_from(mesh.vertices.len()).map_err(|_| "more than 2^32 vertices".to_string())?;
-    debug_assert!(mesh.triangles.iter().flatten().all(|&k| (k as u64) < vertex_count as u64));
     Ok(SurfaceMesh {
         vertices: mesh.vertices.iter().map(|v| [v.x, v.y, v.z]).collect(),
         normals: normals.iter().map(|n| [n.x, n.y, n.z]).collect(),
-        speed: speed.unwrap_or_else(|| vec![0.0; mesh.vertices.len()]),
-        viscosity,
+        viscosity: field(fluid.viscosity),
+        speed: field(&crate::output::preview::speeds(fluid.velocity)),
         triangles: mesh.triangles.iter().map(|t| t.map(|k| k as u32)).collect(),
     })
 }

@@ -9,6 +9,8 @@ pub const LOG: &str = "run.json";
 pub const CHECKPOINT: &str = "checkpoint.bin";
 /// The wall particles, written once.
 pub const BOUNDARY: &str = "boundary.vtu";
+/// The movie `coil render` makes of a run's frames.
+pub const MOVIE: &str = "render.gif";
 
 /// Held (an advisory file lock) by the run writing into the folder, so that no two share it.
 pub const LOCK: &str = "run.lock";
@@ -36,7 +38,8 @@ pub fn series_path(dir: &Path, scene_name: &str) -> PathBuf {
 
 /// The files a run writes into its output folder that `dir` already holds: its log, the
 /// boundary, the series, its checkpoint, and every frame in each format, with any temporary
-/// left by a killed run. Other files are the user's and are never listed.
+/// left by a killed run; and what `coil surface`, `coil render` and `coil pov` wrote from its
+/// frames, which would show the earlier run. Other files are the user's and are never listed.
 pub fn earlier_run_files(dir: &Path) -> io::Result<Vec<PathBuf>> {
     if !dir.is_dir() {
         return Ok(Vec::new());
@@ -47,9 +50,11 @@ pub fn earlier_run_files(dir: &Path) -> io::Result<Vec<PathBuf>> {
         let Some(name) = path.file_name().and_then(|n| n.to_str()) else { continue };
         let name = name.strip_suffix(".tmp").unwrap_or(name);
         let frame = name.strip_prefix("frame_").and_then(|rest| rest.split_once('.')).is_some_and(|(number, ext)| {
-            number.len() == 6 && number.bytes().all(|b| b.is_ascii_digit()) && ["vtu", "ply", "xyz", "png"].contains(&ext)
+            number.len() == 6
+                && number.bytes().all(|b| b.is_ascii_digit())
+                && ["vtu", "ply", "xyz", "png", "surface.ply", "surface.obj", "render.png", "pov", "pov.png"].contains(&ext)
         });
-        if path.is_file() && (frame || [LOG, BOUNDARY, CHECKPOINT].contains(&name) || name.ends_with(".pvd")) {
+        if path.is_file() && (frame || [LOG, BOUNDARY, CHECKPOINT, MOVIE].contains(&name) || name.ends_with(".pvd")) {
             files.push(path);
         }
     }

@@ -6,6 +6,7 @@ use super::summary::WrittenFile;
 use super::{io_error, RunError, Tally};
 use crate::output::frame::Frame;
 use crate::output::preview::{own_range, render, speeds, Coloring, View};
+use crate::output::surface::{mesh_path, reconstruct, Fluid, MeshFormat, SurfaceParameters};
 use crate::output::vtu::PvdSeries;
 use crate::output::write_atomically;
 use crate::scene::{FrameFormat, Scene};
@@ -25,6 +26,8 @@ pub struct FrameWriter<'a> {
     /// `None` where the scene writes no `.vtu` frames for a series to list.
     series: Option<PvdSeries>,
     frame: Frame,
+    /// The surface meshes' settings, from the run's spacing and h.
+    surface: SurfaceParameters,
 }
 
 impl<'a> FrameWriter<'a> {
@@ -34,7 +37,10 @@ impl<'a> FrameWriter<'a> {
             let listed = tally.frame_times.iter().enumerate().map(|(k, &t)| (t, frame_name(k))).collect();
             PvdSeries::new(series_path(dir, &scene.name), listed)
         });
-        Self { scene, dir, preview, series, frame: Frame::default() }
+        let material = &scene.material;
+        let surface =
+            SurfaceParameters::for_run(material.particle_spacing_m, scene.support_radius(), material.rest_density_kg_m3);
+        Self { scene, dir, preview, series, frame: Frame::default(), surface }
     }
 
     /// The `.pvd` file, where the run writes one.
@@ -58,10 +64,21 @@ impl<'a> FrameWriter<'a> {
         let name = frame_name(tally.frame_times.len());
         let path = self.dir.join(&name);
         for format in &output.formats {
+            let surface;
             let (file, bytes) = match format {
                 FrameFormat::Vtu => (path.clone(), self.frame.to_vtu(output.vtu_encoding)),
                 FrameFormat::Ply => (path.with_extension("ply"), self.frame.to_ply()),
                 FrameFormat::Xyz => (path.with_extension("xyz"), self.frame.to_xyz()),
+                FrameFormat::Surface => {
+                    let file = mesh_path(&path, MeshFormat::Ply);
+                    let f = &self.frame;
+                    let fluid =
+                        Fluid { position: &f.position, density: &f.density, viscosity: &f.viscosity, velocity: &f.velocity };
+                    let mesh =
+                        reconstruct(fluid, &self.surface).map_err(|e| io_error("surface", &file, std::io::Error::other(e)))?;
+                    surface = mesh.to_ply();
+                    (file, surface.as_slice())
+                }
             };
             write_atomically(&file, bytes).map_err(|e| io_error("frame", &file, e))?;
             let name = file.file_name().expect("a frame file has a name").to_string_lossy().into_owned();

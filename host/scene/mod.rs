@@ -645,6 +645,8 @@ pub enum FrameFormat {
     Vtu,
     Ply,
     Xyz,
+    /// The free surface's mesh (`output::surface`), `frame_NNNNNN.surface.ply`.
+    Surface,
 }
 
 fn default_formats() -> Vec<FrameFormat> {
