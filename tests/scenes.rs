@@ -708,3 +708,27 @@ fn an_unconverged_implicit_solve_stops_the_run_or_is_counted() {
     assert!(line.contains("1 at most") && !line.contains(" 0 step(s) unconverged"), "{line}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `simulation.refinement = 2` on the round jet: half the spacing (10 particles across D), eight
+/// times the capacity, so the inlets stall at the same time, and half the wobble; the resolved
+/// scene holds those values and no factor, so it loads as the same scene again. Out of range or
+/// not a number, it is refused, naming the field.
+#[test]
+fn refinement_scales_spacing_capacity_and_wobble_once() {
+    use coil::scene::overrides::Override;
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/round_jet.toml");
+    let base = Scene::load(&path).expect("shipped");
+    let refined = Scene::load_with(&path, &[Override::parse("simulation.refinement=2").expect("an override")]).expect("valid");
+    assert_eq!(refined.material.particle_spacing_m, 0.5 * base.material.particle_spacing_m);
+    assert_eq!(refined.simulation.max_fluid_particles, base.simulation.max_fluid_particles.map(|c| 8 * c));
+    assert_eq!(refined.inlets[0].wobble_m, 0.5 * base.inlets[0].wobble_m);
+    assert_eq!(refined.simulation.refinement, 1.0);
+    let resolved = toml::to_string(&refined).expect("serializes");
+    assert!(!resolved.contains("refinement"), "{resolved}");
+    assert_eq!(Scene::parse(&resolved, "run.json").expect("valid"), refined);
+    for bad in ["9", "0", "nan"] {
+        let e = Scene::load_with(&path, &[Override::parse(&format!("simulation.refinement={bad}")).expect("an override")])
+            .expect_err("refused");
+        assert_eq!(e.field, "simulation.refinement", "{bad}: {e}");
+    }
+}

@@ -123,7 +123,8 @@ pub fn render_command(path: &Path, options: &RenderOptions) -> Result<(), String
         .collect::<Result<Vec<_>, String>>()?;
     bar.finish_and_clear();
     let drawn = started.elapsed().as_secs_f64();
-    let movie = if path.is_dir() { Some(write_movie(&dir, &pictures, options.movie_delay_cs)?) } else { None };
+    let movie =
+        if path.is_dir() && !pictures.is_empty() { Some(write_movie(&dir, &pictures, options.movie_delay_cs)?) } else { None };
     let first = pictures.first().map(|(p, _)| p.display().to_string()).unwrap_or_default();
     println!(
         "{} pictures ({} views, {} px a panel, coloured by {quantity} from {} to {}) beside the frames, e.g. {first}; {drawn:.1} s on {} threads",
@@ -152,10 +153,10 @@ pub fn frame_times(dir: &Path, scene: &Scene, frames: &[PathBuf]) -> Result<Vec<
         .collect())
 }
 
-/// The pictures as an animated GIF, `render.gif` in `dir`, looping.
+/// The pictures, at least one, as an animated GIF, `render.gif` in `dir`, looping.
 fn write_movie(dir: &Path, pictures: &[(PathBuf, coil::output::image::Image)], delay_cs: u16) -> Result<PathBuf, String> {
     let path = dir.join(MOVIE);
-    let Some((_, first)) = pictures.first() else { return Ok(path) };
+    let Some((_, first)) = pictures.first() else { return Err(format!("{}: no pictures to make it of", path.display())) };
     let (w, h) = (u16::try_from(first.width), u16::try_from(first.height));
     let (Ok(w), Ok(h)) = (w, h) else { return Err("--size: the pictures are too large for a GIF".into()) };
     let frames: Vec<gif::Frame> = pictures

@@ -431,6 +431,16 @@ pub struct SimulationSettings {
     /// Settings of the divergence-free pressure solves and their time step.
     #[serde(default, skip_serializing_if = "DivergenceFree::is_default")]
     pub divergence_free: DivergenceFree,
+    /// Refines the scene by this factor (1/4 to 8): the particle spacing divided by it, the
+    /// fluid capacity multiplied by its cube (the inlets fill it at the same time) and each
+    /// nozzle's wobble divided by it (the same wobble a spacing). Applied once at load: the
+    /// resolved scene holds the refined values and no factor.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub refinement: f64,
+}
+
+fn is_one(x: &f64) -> bool {
+    *x == 1.0
 }
 
 /// How pressure is found.
@@ -894,8 +904,34 @@ impl Scene {
             field: "(syntax)".into(),
             reason: e.message().to_string(),
         })?;
+        let mut scene = scene;
+        scene.refine(file)?;
         scene.validate(&given, file)?;
         Ok(scene)
+    }
+
+    /// Applies `simulation.refinement` and sets it back to 1.
+    fn refine(&mut self, file: &str) -> Result<(), SceneError> {
+        let r = self.simulation.refinement;
+        if r == 1.0 {
+            return Ok(());
+        }
+        if !(0.25..=8.0).contains(&r) {
+            return Err(SceneError {
+                file: file.into(),
+                field: "simulation.refinement".into(),
+                reason: format!("must be from 0.25 to 8 (the spacing's divisor), got {r}"),
+            });
+        }
+        self.material.particle_spacing_m /= r;
+        if let Some(capacity) = &mut self.simulation.max_fluid_particles {
+            *capacity = (*capacity as f64 * r * r * r).ceil() as usize;
+        }
+        for inlet in &mut self.inlets {
+            inlet.wobble_m /= r;
+        }
+        self.simulation.refinement = 1.0;
+        Ok(())
     }
 
     /// Support radius h (m).
