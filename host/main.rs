@@ -31,6 +31,15 @@ fn set_threads(threads: Option<usize>) -> Result<(), String> {
     }
 }
 
+/// A `--range MIN,MAX` of colours, if given.
+fn colour_range(range: Option<&[f64]>) -> Result<Option<(f64, f64)>, String> {
+    match range {
+        None => Ok(None),
+        Some(&[min, max]) if min < max => Ok(Some((min, max))),
+        Some(r) => Err(format!("--range: expected MIN,MAX with MIN < MAX, got {r:?}")),
+    }
+}
+
 /// Reads a scene and applies its `--set` overrides, validating the result.
 fn load_scene(path: &Path, set: &[String]) -> Result<Scene, String> {
     let overrides = set.iter().map(|o| Override::parse(o)).collect::<Result<Vec<_>, _>>().map_err(|e| e.to_string())?;
@@ -84,11 +93,7 @@ fn command(command: Command) -> Result<ExitCode, String> {
                 RenderColorArg::Viscosity => RenderColor::Viscosity,
                 RenderColorArg::Speed => RenderColor::Speed,
             };
-            let range = match range.as_deref() {
-                None => None,
-                Some(&[min, max]) if min < max => Some((min, max)),
-                Some(r) => return Err(format!("--range: expected MIN,MAX with MIN < MAX, got {r:?}")),
-            };
+            let range = colour_range(range.as_deref())?;
             let options = RenderOptions { cameras, color, range, size, movie_delay_cs: delay, quiet };
             render_command(&path, &options).map(|()| ExitCode::SUCCESS)
         }
@@ -162,11 +167,7 @@ fn command(command: Command) -> Result<ExitCode, String> {
                 ColorArg::Viscosity => Coloring::Viscosity,
                 ColorArg::Speed => Coloring::Speed,
             };
-            let range = match range.as_deref() {
-                None => None,
-                Some(&[min, max]) if min < max => Some((min, max)),
-                Some(r) => return Err(format!("--range: expected MIN,MAX with MIN < MAX, got {r:?}")),
-            };
+            let range = colour_range(range.as_deref())?;
             println!("{}", preview(&frame, view, coloring, range, size, output)?.display());
             Ok(ExitCode::SUCCESS)
         }

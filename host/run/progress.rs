@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 
 /// Wall time (s) over which the current rate is measured: long enough to span several reports
 /// of a slow step, short enough to follow a jet whose particle count grows.
-const RATE_WINDOW_S: f64 = 5.0;
+pub const RATE_WINDOW_S: f64 = 5.0;
 
 /// Where a run was at one report.
 #[derive(Debug, Clone, Copy, PartialEq)]
