@@ -7,7 +7,7 @@ use coil::output::preview::speeds;
 use coil::output::vtu_read::{read_frame, FrameData};
 use coil::output::write_atomically;
 use coil::run::folder::LOG;
-use coil::scene::{Boundary, Scene};
+use coil::scene::Scene;
 use rayon::prelude::*;
 use std::path::Path;
 use std::process::Command;
@@ -51,10 +51,7 @@ pub fn pov_command(path: &Path, options: &PovOptions) -> Result<(), String> {
         (min_m, max_m) = (scene.domain.min_m, scene.domain.max_m);
     }
     let spacing = scene.material.particle_spacing_m;
-    let plate = scene.boundaries.first().map(|b| match *b {
-        Boundary::Plate { height_m, .. } => height_m,
-        Boundary::Box { min_m, .. } => min_m[1],
-    });
+    let plate = super::render::floor_m(&scene);
     let margin = 0.15 * (0..3).map(|a| max_m[a] - min_m[a]).fold(0.0, f64::max);
     for a in [0, 2] {
         min_m[a] -= margin;

@@ -54,14 +54,20 @@ fn stage_of(scene: &Scene, meshes: &[SurfaceMesh], quantity: String, range: (f64
         max_m[a] += margin;
     }
     let spacing = scene.material.particle_spacing_m;
-    let plate = scene.boundaries.first().map(|b| match *b {
-        Boundary::Plate { height_m, .. } => height_m,
-        Boundary::Box { min_m, .. } => min_m[1],
-    });
+    let plate = floor_m(scene);
     if let Some(top) = plate {
         min_m[1] = top - 2.0 * spacing;
     }
     Stage { min_m, max_m, plate: plate.map(|top| (top, 2.0 * spacing)), quantity, range, size }
+}
+
+/// The floor the pictures stand on (m): the top of the scene's first boundary, a plate, or a
+/// box's floor.
+pub fn floor_m(scene: &Scene) -> Option<f64> {
+    scene.boundaries.first().map(|b| match *b {
+        Boundary::Plate { height_m, .. } => height_m,
+        Boundary::Box { min_m, .. } => min_m[1],
+    })
 }
 
 /// Renders the frames `path` names; for a run's folder also writes `render.gif`. Prints where.
@@ -79,8 +85,7 @@ pub fn render_command(path: &Path, options: &RenderOptions) -> Result<(), String
         RenderColor::Viscosity => true,
         RenderColor::Speed => false,
     };
-    let spacing = scene.material.particle_spacing_m;
-    let parameters = SurfaceParameters::for_run(spacing, scene.support_radius(), scene.material.rest_density_kg_m3);
+    let parameters = SurfaceParameters::of_scene(&scene);
     let bar = if options.quiet { ProgressBar::hidden() } else { ProgressBar::new(2 * frames.len() as u64) };
     bar.set_style(
         ProgressStyle::with_template("{bar:30.cyan/blue} {pos}/{len} (mesh, then draw), ETA {eta}").expect("a valid template"),

@@ -56,7 +56,7 @@ pub fn surface_command(path: &Path, options: &SurfaceOptions) -> Result<(), Stri
     let log = dir.join(LOG);
     let scene = Scene::load_with(&log, &[]).map_err(|e| e.to_string())?;
     let spacing = scene.material.particle_spacing_m;
-    let mut parameters = SurfaceParameters::for_run(spacing, scene.support_radius(), scene.material.rest_density_kg_m3);
+    let mut parameters = SurfaceParameters::of_scene(&scene);
     parameters.cube_size_m = options.cube_size * spacing;
     parameters.support_radius_m = options.support_radius * scene.support_radius();
     parameters.iso_threshold = options.iso_threshold;

@@ -42,6 +42,14 @@ impl SurfaceParameters {
     }
 }
 
+impl SurfaceParameters {
+    /// [`SurfaceParameters::for_run`] of `scene`'s spacing, h and rho0.
+    pub fn of_scene(scene: &crate::scene::Scene) -> Self {
+        let material = &scene.material;
+        Self::for_run(material.particle_spacing_m, scene.support_radius(), material.rest_density_kg_m3)
+    }
+}
+
 /// A triangle mesh with a normal and the fluid's viscosity (m^2/s) and speed (m/s) at each
 /// vertex; triangles wind counter-clockwise seen from outside the fluid.
 #[derive(Debug, Clone, Default, PartialEq)]

@@ -37,9 +37,7 @@ impl<'a> FrameWriter<'a> {
             let listed = tally.frame_times.iter().enumerate().map(|(k, &t)| (t, frame_name(k))).collect();
             PvdSeries::new(series_path(dir, &scene.name), listed)
         });
-        let material = &scene.material;
-        let surface =
-            SurfaceParameters::for_run(material.particle_spacing_m, scene.support_radius(), material.rest_density_kg_m3);
+        let surface = SurfaceParameters::of_scene(scene);
         Self { scene, dir, preview, series, frame: Frame::default(), surface }
     }
 
