@@ -25,7 +25,8 @@ pub fn pressure_acceleration<R: Real>(pressure_sum: Vec3<R>, rho_i: R, fluid: &F
 }
 
 /// Acceleration of fluid particle `i` (m/s^2): pressure, Eq. (7), plus the viscous operator,
-/// plus gravity.
+/// plus gravity; gravity alone, without a neighbor loop, where pressure is solved apart (no
+/// sound speed) and the operator adds nothing.
 #[inline(always)]
 pub fn acceleration<R: Real, Op: ViscousOperator<R>, N: Neighbors>(
     i: usize,
@@ -34,6 +35,9 @@ pub fn acceleration<R: Real, Op: ViscousOperator<R>, N: Neighbors>(
     fluid: &Fluid<R>,
     viscous: &Op,
 ) -> Vec3<R> {
+    if !Op::VISCOUS && fluid.sound_speed2 == R::ZERO {
+        return fluid.gravity;
+    }
     let rho_i = density.at(i);
     let p_i = pressure(rho_i, fluid);
     let own = viscous.own(i, rho_i);

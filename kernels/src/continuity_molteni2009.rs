@@ -12,7 +12,7 @@
 //! boundary particles keep the summed density of the paper (Sec. III-B).
 
 use crate::cell_grid::{Neighborhood, Neighbors};
-use crate::density::{density, DensityKernel};
+use crate::density::{boundary_density, DensityKernel};
 use crate::fluid::Fluid;
 use crate::real::Real;
 use crate::topology::Open;
@@ -65,15 +65,14 @@ pub fn density_rate<R: Real, N: Neighbors>(i: usize, a: &ContinuityArgs<R, N>) -
 }
 
 /// The density rate pass for particle `i`: fluid particles get their d rho / dt, fixed
-/// boundary particles their summed density, Eq. (5), with kernel `K`, floored by
-/// [`Fluid::wall_density`]. Race-free: fluid particles read only fluid densities, which this
+/// boundary particles their density by [`boundary_density`] with kernel `K`. Race-free: fluid particles read only fluid densities, which this
 /// pass does not write.
 #[inline(always)]
 pub fn continuity_pass<R: Real, K: DensityKernel, N: Neighbors>(i: usize, a: &ContinuityArgs<R, N>) {
     // SAFETY: invocation i owns entry i of both outputs.
     unsafe {
         if a.fluid.is_boundary(a.id.at(i)) {
-            a.density.write(i, a.fluid.wall_density(density::<R, K, N>(i, &a.neighborhood, &a.fluid)));
+            a.density.write(i, boundary_density::<R, K, N>(i, &a.neighborhood, &a.fluid));
         } else {
             a.density_rate.write(i, density_rate(i, a));
         }

@@ -58,6 +58,20 @@ pub fn pressure<R: Real>(density: R, fluid: &Fluid<R>) -> R {
     (fluid.sound_speed2 * (density - fluid.rest_density)).max(fluid.pressure_floor)
 }
 
+/// The density of fixed boundary particle `i` (kg/m^3): its Eq. (5) sum with kernel `K`,
+/// floored by [`Fluid::wall_density`]. Away from fluid no fluid particle reads it, and it takes
+/// rho0 without a neighbor loop: the wall particles beside the fluid divide by it in their
+/// velocity gradient, Eq. (8), whose terms between walls at rest are zero, so any positive
+/// density leaves them as they are.
+#[inline(always)]
+pub fn boundary_density<R: Real, K: DensityKernel, N: Neighbors>(i: usize, neighborhood: &N, fluid: &Fluid<R>) -> R {
+    if neighborhood.near_fluid(i) {
+        fluid.wall_density(density::<R, K, N>(i, neighborhood, fluid))
+    } else {
+        fluid.rest_density
+    }
+}
+
 /// Arguments of the density pass.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
@@ -69,12 +83,15 @@ pub struct DensityArgs<'a, R, N = Neighborhood<'a, Open>> {
 }
 
 /// The density pass for particle `i` with the density kernel `K`, fixed boundary particles'
-/// floored by [`Fluid::wall_density`]. Pressure is not stored: Eq. (6) is cheaper to evaluate
-/// where it is read than to load.
+/// by [`boundary_density`]. Pressure is not stored: Eq. (6) is cheaper to evaluate where it is
+/// read than to load.
 #[inline(always)]
 pub fn density_pass<R: Real, K: DensityKernel, N: Neighbors>(i: usize, a: &DensityArgs<R, N>) {
-    let summed = density::<R, K, N>(i, &a.neighborhood, &a.fluid);
-    let rho = if a.fluid.is_boundary(a.id.at(i)) { a.fluid.wall_density(summed) } else { summed };
+    let rho = if a.fluid.is_boundary(a.id.at(i)) {
+        boundary_density::<R, K, N>(i, &a.neighborhood, &a.fluid)
+    } else {
+        density::<R, K, N>(i, &a.neighborhood, &a.fluid)
+    };
     // SAFETY: invocation i owns entry i.
     unsafe { a.density.write(i, rho) };
 }

@@ -59,6 +59,7 @@ pub struct PressureAndGravity;
 
 impl<R: Real> ViscousOperator<R> for PressureAndGravity {
     const NAME: &'static str = "pressure";
+    const VISCOUS: bool = false;
     type Own = ();
     #[inline(always)]
     fn own(&self, _i: usize, _density_i: R) {}

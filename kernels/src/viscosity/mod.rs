@@ -26,6 +26,9 @@ pub mod stress_andrade2014;
 pub trait ViscousOperator<R: Real>: Copy + Send + Sync {
     /// The operator's name in PTX kernel names (`acceleration_<NAME>_f32`).
     const NAME: &'static str;
+    /// Whether it adds anything: an operator that does not, and pressure that is solved
+    /// elsewhere (no sound speed), leave the acceleration pass gravity alone.
+    const VISCOUS: bool = true;
     /// What the operator reads of particle i once, before its neighbor loop.
     type Own: Copy;
     fn own(&self, i: usize, density_i: R) -> Self::Own;
