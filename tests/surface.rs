@@ -201,6 +201,7 @@ fn surface_and_render_commands_write_beside_the_frames() {
     assert_eq!(&gif[..6], b"GIF89a");
     let pictures = gif.windows(2).filter(|w| w == &[0x21, 0xF9]).count();
     assert_eq!(pictures, frames.len(), "one graphic control block a picture");
+    mp4_through_ffmpeg(&out, &String::from_utf8_lossy(&render.stdout), frames.len());
     for (args, named) in [
         (vec!["surface", "no/such/run"], "no/such/run"),
         (vec!["surface", out_arg, "--cube-size", "0"], "--cube-size"),
@@ -214,6 +215,51 @@ fn surface_and_render_commands_write_beside_the_frames() {
         assert!(stderr.contains(named) && !stderr.contains("panicked"), "{args:?}: {stderr}");
     }
     std::fs::remove_dir_all(&out).ok();
+}
+
+/// `render.mp4` beside the GIF: ffmpeg's own where it is installed, else the advice to install
+/// it; then through stand-ins on the PATH, one that keeps what it is fed (the raw RGB pictures,
+/// of the size and at the rate it is told) and one that fails, which leaves a
+/// warning, the GIF, and no movie or partial file.
+fn mp4_through_ffmpeg(out: &std::path::Path, said: &str, frames: usize) {
+    let out_arg = out.to_str().expect("utf-8");
+    let mp4 = out.join("render.mp4");
+    if said.contains("install ffmpeg") {
+        assert!(!mp4.exists(), "{said}");
+    } else {
+        let video = std::fs::read(&mp4).unwrap_or_else(|e| panic!("{said}: {e}"));
+        assert_eq!(&video[4..8], b"ftyp", "an MP4 file starts with its ftyp box");
+    }
+    let bin = out.join("stand-in");
+    std::fs::create_dir_all(&bin).expect("a folder for the stand-in");
+    let ffmpeg = bin.join("ffmpeg");
+    let render =
+        || common::coil_with_path_first(&bin, &["render", out_arg, "--quiet", "--size", "96", "--views", "front,oblique"]);
+    let stand_in = |script: &str| {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::write(&ffmpeg, script).expect("the stand-in");
+        std::fs::set_permissions(&ffmpeg, std::fs::Permissions::from_mode(0o755)).expect("executable");
+    };
+    stand_in("#!/bin/sh\nfor last; do :; done\nprintf '%s\\n' \"$@\" > \"$(dirname \"$0\")/args\"\ncat > \"$last\"\n");
+    let fed = render();
+    assert!(fed.status.success(), "{}", String::from_utf8_lossy(&fed.stderr));
+    let args = std::fs::read_to_string(bin.join("args")).expect("the stand-in's arguments");
+    let arg_after = |flag: &str| args.lines().skip_while(|a| *a != flag).nth(1).unwrap_or_default().to_string();
+    let png = std::fs::read(out.join("frame_000000.render.png")).expect("a picture");
+    let dimension = |at: usize| u32::from_be_bytes(png[at..at + 4].try_into().expect("4 bytes")) as usize;
+    let (width, height) = (dimension(16), dimension(20));
+    assert_eq!(arg_after("-s"), format!("{width}x{height}"), "{args}");
+    assert_eq!(arg_after("-framerate"), "100/8", "{args}");
+    let bytes = std::fs::metadata(&mp4).expect("the stand-in's movie, renamed").len() as usize;
+    assert_eq!(bytes, frames * width * height * 3, "{frames} pictures of {width}x{height} RGB");
+    std::fs::remove_file(&mp4).expect("removable");
+    stand_in("#!/bin/sh\ncat > /dev/null\necho \"Unknown encoder 'libx264'\" >&2\nexit 1\n");
+    let failed = render();
+    let stderr = String::from_utf8_lossy(&failed.stderr);
+    assert!(failed.status.success(), "the pictures and the GIF stand: {stderr}");
+    assert!(stderr.contains("render.mp4 not written") && stderr.contains("Unknown encoder"), "{stderr}");
+    assert!(!mp4.exists() && !out.join("render.mp4.tmp").exists());
+    assert!(out.join("render.gif").is_file());
 }
 
 /// The POV-Ray scene of the ball: one blob holding a sphere component of radius h per

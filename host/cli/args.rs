@@ -122,7 +122,7 @@ pub enum Command {
     /// Draw the free surface of a run's frames from fixed cameras (front, side, top and oblique),
     /// shaded and coloured by viscosity (m^2/s) or speed (m/s), with the time, the plate, a
     /// scale bar and a colour bar: frame_NNNN.render.png beside each frame and, for a run's
-    /// folder, the movie render.gif.
+    /// folder, the movie render.gif, and render.mp4 where ffmpeg is installed.
     Render {
         /// A run's output folder (every frame of its series) or one .vtu frame.
         path: PathBuf,

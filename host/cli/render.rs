@@ -1,16 +1,18 @@
 //! `coil render`: pictures of a run's free surface from fixed cameras, one PNG beside each frame,
-//! and for a whole run an animated GIF of them.
+//! and for a whole run an animated GIF of them, and an MP4 where `ffmpeg` is installed.
 
 use super::surface::frames_of;
 use coil::output::render::{Camera, Stage};
 use coil::output::surface::{reconstruct, Fluid, SurfaceMesh, SurfaceParameters};
 use coil::output::vtu_read::{read_frame, read_series};
 use coil::output::write_atomically;
-use coil::run::folder::{series_path, LOG, MOVIE};
+use coil::run::folder::{series_path, LOG, MOVIE, MOVIE_MP4};
 use coil::scene::{Boundary, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
+use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
 use std::time::Instant;
 
 /// What the colours show.
@@ -128,8 +130,12 @@ pub fn render_command(path: &Path, options: &RenderOptions) -> Result<(), String
         .collect::<Result<Vec<_>, String>>()?;
     bar.finish_and_clear();
     let drawn = started.elapsed().as_secs_f64();
-    let movie =
-        if path.is_dir() && !pictures.is_empty() { Some(write_movie(&dir, &pictures, options.movie_delay_cs)?) } else { None };
+    let movie = if path.is_dir() && !pictures.is_empty() {
+        let gif = write_movie(&dir, &pictures, options.movie_delay_cs)?;
+        Some((gif, write_mp4(&dir, &pictures, options.movie_delay_cs)))
+    } else {
+        None
+    };
     let first = pictures.first().map(|(p, _)| p.display().to_string()).unwrap_or_default();
     println!(
         "{} pictures ({} views, {} px a panel, coloured by {quantity} from {} to {}) beside the frames, e.g. {first}; {drawn:.1} s on {} threads",
@@ -140,8 +146,19 @@ pub fn render_command(path: &Path, options: &RenderOptions) -> Result<(), String
         range.1,
         rayon::current_num_threads()
     );
-    if let Some(movie) = movie {
-        println!("movie: {} ({:.1} s)", movie.display(), started.elapsed().as_secs_f64() - drawn);
+    if let Some((gif, mp4)) = movie {
+        let seconds = started.elapsed().as_secs_f64() - drawn;
+        match mp4 {
+            Mp4::Written(mp4) => println!("movie: {} and {} ({seconds:.1} s)", gif.display(), mp4.display()),
+            Mp4::NoFfmpeg => println!(
+                "movie: {} ({seconds:.1} s); for {MOVIE_MP4} as well, install ffmpeg (Debian: apt install ffmpeg)",
+                gif.display()
+            ),
+            Mp4::Failed(why) => {
+                println!("movie: {} ({seconds:.1} s)", gif.display());
+                eprintln!("warning: {why}");
+            }
+        }
     }
     Ok(())
 }
@@ -182,4 +199,59 @@ fn write_movie(dir: &Path, pictures: &[(PathBuf, coil::output::image::Image)], d
     }
     write_atomically(&path, &bytes).map_err(|e| format!("{}: cannot be written: {e}", path.display()))?;
     Ok(path)
+}
+
+/// What became of the MP4.
+enum Mp4 {
+    Written(PathBuf),
+    /// No `ffmpeg` on the PATH.
+    NoFfmpeg,
+    /// Why ffmpeg wrote none; the GIF and the pictures stand.
+    Failed(String),
+}
+
+/// The pictures as H.264 video (yuv420p, sizes padded to even, as players want), `render.mp4` in
+/// `dir`, through `ffmpeg` fed the raw pictures on its input: written under a temporary name and
+/// renamed when ffmpeg succeeds, so a failed encode leaves nothing.
+fn write_mp4(dir: &Path, pictures: &[(PathBuf, coil::output::image::Image)], delay_cs: u16) -> Mp4 {
+    let path = dir.join(MOVIE_MP4);
+    let partial = dir.join(format!("{MOVIE_MP4}.tmp"));
+    let Some((_, first)) = pictures.first() else { return Mp4::Failed(format!("{}: no pictures", path.display())) };
+    let size = format!("{}x{}", first.width, first.height);
+    let rate = format!("100/{}", delay_cs.max(1));
+    let args = ["-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", &size, "-framerate", &rate, "-i", "-"];
+    let encode = ["-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "20", "-f", "mp4"];
+    let spawned = Command::new("ffmpeg")
+        .args(args)
+        .args(encode)
+        .arg(&partial)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn();
+    let mut child = match spawned {
+        Ok(child) => child,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Mp4::NoFfmpeg,
+        Err(e) => return Mp4::Failed(format!("{}: ffmpeg could not be started: {e}", path.display())),
+    };
+    let fed = child.stdin.take().map_or(Ok(()), |mut input| pictures.iter().try_for_each(|(_, p)| input.write_all(&p.pixels)));
+    let failed = |why: String| {
+        std::fs::remove_file(&partial).ok();
+        Mp4::Failed(format!("{} not written: {why}", path.display()))
+    };
+    let finished = match child.wait_with_output() {
+        Ok(finished) => finished,
+        Err(e) => return failed(format!("ffmpeg: {e}")),
+    };
+    if !finished.status.success() {
+        let said = String::from_utf8_lossy(&finished.stderr);
+        return failed(format!("ffmpeg {}: {}", finished.status, said.trim().lines().last().unwrap_or("no message")));
+    }
+    if let Err(e) = fed {
+        return failed(format!("ffmpeg stopped reading the pictures: {e}"));
+    }
+    match std::fs::rename(&partial, &path) {
+        Ok(()) => Mp4::Written(path),
+        Err(e) => failed(format!("{e}")),
+    }
 }

@@ -11,6 +11,8 @@ pub const CHECKPOINT: &str = "checkpoint.bin";
 pub const BOUNDARY: &str = "boundary.vtu";
 /// The movie `coil render` makes of a run's frames.
 pub const MOVIE: &str = "render.gif";
+/// The same movie as H.264 video, where `ffmpeg` is installed.
+pub const MOVIE_MP4: &str = "render.mp4";
 
 /// Held (an advisory file lock) by the run writing into the folder, so that no two share it.
 pub const LOCK: &str = "run.lock";
@@ -54,7 +56,7 @@ pub fn earlier_run_files(dir: &Path) -> io::Result<Vec<PathBuf>> {
                 && number.bytes().all(|b| b.is_ascii_digit())
                 && ["vtu", "ply", "xyz", "png", "surface.ply", "surface.obj", "render.png", "pov", "pov.png"].contains(&ext)
         });
-        if path.is_file() && (frame || [LOG, BOUNDARY, CHECKPOINT, MOVIE].contains(&name) || name.ends_with(".pvd")) {
+        if path.is_file() && (frame || [LOG, BOUNDARY, CHECKPOINT, MOVIE, MOVIE_MP4].contains(&name) || name.ends_with(".pvd")) {
             files.push(path);
         }
     }

@@ -93,6 +93,16 @@ pub fn coil<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_coil")).args(args).output().expect("coil runs")
 }
 
+/// `coil` with `args` and the folder `first` searched before the PATH, where a test puts a
+/// program coil runs (a stand-in ffmpeg).
+pub fn coil_with_path_first<S: AsRef<std::ffi::OsStr>>(first: &std::path::Path, args: &[S]) -> Output {
+    let path = std::env::join_paths(
+        std::iter::once(first.to_path_buf()).chain(std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())),
+    )
+    .expect("a joinable PATH");
+    Command::new(env!("CARGO_BIN_EXE_coil")).args(args).env("PATH", path).output().expect("coil runs")
+}
+
 /// A fixed pseudo-random sequence in [0, 1) (a 64-bit LCG's top 53 bits).
 pub fn uniform(state: &mut u64) -> f64 {
     *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
