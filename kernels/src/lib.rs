@@ -43,6 +43,7 @@ pub mod cross_viscosity;
 pub mod density;
 pub mod dfsph_bender2017;
 pub mod diagnostics;
+pub mod f64_math;
 pub mod fluid;
 pub mod fluid_cells;
 pub mod leapfrog;

@@ -1,7 +1,8 @@
 //! Floating-point precision of the physics, chosen once per run (f32 or f64).
 //!
 //! Math that `core` lacks (`sqrt`, `exp2`, `log2`) goes to `std` on the host and to LLVM/NVVM
-//! intrinsics on nvptx: `libm` would compile to slow table-driven software math on the device.
+//! intrinsics on nvptx (f64 `exp2` and `log2`, which PTX lacks, to [`crate::f64_math`]): `libm`
+//! would compile to slow table-driven software math on the device.
 
 use core::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
 
@@ -177,16 +178,16 @@ impl Real for f64 {
     fn sqrt(self) -> Self {
         unsafe { device_math::sqrt_f64(self) }
     }
-    // PTX has no f64 `ex2`/`lg2`; they only feed the Cross exponent (K D)^n, where the f32
-    // approximation's ~2^-22 relative error is far below the discretisation error.
+    // PTX has no f64 `ex2`/`lg2`: arithmetic in f64 instead of the f32 approximations, so that
+    // an f64 run's Cross exponent is f64 on the device too.
     #[cfg(target_arch = "nvptx64")]
     #[inline(always)]
     fn exp2(self) -> Self {
-        unsafe { device_math::ex2_f32(self as f32) as f64 }
+        crate::f64_math::exp2(self)
     }
     #[cfg(target_arch = "nvptx64")]
     #[inline(always)]
     fn log2(self) -> Self {
-        unsafe { device_math::lg2_f32(self as f32) as f64 }
+        crate::f64_math::log2(self)
     }
 }
