@@ -283,14 +283,17 @@ impl Gpu {
         }
     }
 
-    /// Copies the first `host.len()` bytes of `device` into `host` (waits for the stream).
+    /// Copies the first `host.len()` bytes of `device` into `host`, then waits for the stream:
+    /// a copy into pageable memory returns once done, as CUDA documents it, but the explicit
+    /// wait does not rest on that, and a fault of the kernels before the copy surfaces here.
     pub fn download(&self, device: &Buffer, host: &mut [u8]) -> Result<(), CudaError> {
         if host.is_empty() {
             return Ok(());
         }
         match (&self.engine, device) {
             (Engine::Cuda(d), Buffer::Device(slice)) => {
-                d.stream.memcpy_dtoh(&slice.slice(..host.len()), host).map_err(|error| self.failed("cuMemcpyDtoH", error))
+                d.stream.memcpy_dtoh(&slice.slice(..host.len()), host).map_err(|error| self.failed("cuMemcpyDtoH", error))?;
+                d.stream.synchronize().map_err(|error| self.failed("cuStreamSynchronize", error))
             }
             (_, device) => {
                 host.copy_from_slice(&device.host_bytes()[..host.len()]);
