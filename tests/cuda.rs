@@ -1235,3 +1235,73 @@ fn a_run_stopped_on_the_gpu_resumes_to_the_frames_of_one_never_stopped() {
         std::fs::remove_dir_all(&root).ok();
     }
 }
+
+/// Every driver function this build links through cudarc (each a lazily loaded static named
+/// after it in the binary's symbols, `<len><name>2_S17h...`) is one `Gpu::open` looks up first,
+/// so that no call in a run meets a function the driver lacks.
+#[test]
+fn the_driver_functions_looked_up_at_open_are_all_that_the_build_calls() {
+    let binary = std::fs::read(std::env::current_exe().expect("this test's binary")).expect("readable");
+    let marker = b"2_S17h";
+    let mut linked = std::collections::BTreeSet::new();
+    for end in (0..binary.len().saturating_sub(marker.len())).filter(|&k| binary[k..].starts_with(marker)) {
+        // The name is the `len` bytes before the marker, preceded by `len` in decimal.
+        for len in 3..48.min(end) {
+            let (name, before) = (&binary[end - len..end], &binary[..end - len]);
+            let digits = len.to_string();
+            if before.ends_with(digits.as_bytes())
+                && name.starts_with(b"cu")
+                && name[2].is_ascii_uppercase()
+                && name.iter().all(|b| b.is_ascii_alphanumeric() || *b == b'_')
+            {
+                linked.insert(String::from_utf8_lossy(name).into_owned());
+            }
+        }
+    }
+    assert!(linked.contains("cuLaunchKernel") && linked.len() > 20, "the symbols were not found: {linked:?}");
+    let missing: Vec<_> = linked.iter().filter(|f| !coil::cuda::gpu::DRIVER_FUNCTIONS.contains(&f.as_str())).collect();
+    assert!(missing.is_empty(), "linked but not looked up at open: {missing:?}");
+}
+
+/// A driver library that lacks most functions (a stand-in libcuda.so built here with `cc`,
+/// found first through LD_LIBRARY_PATH) gives `--backend cuda` a clear error naming the first
+/// missing function, and `--backend auto` the CPU with that reason: never a panic.
+#[test]
+fn an_old_driver_is_an_error_not_a_panic() {
+    let dir = std::env::temp_dir().join(format!("coil-old-driver-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a folder for the stand-in driver");
+    let source = dir.join("cuda.c");
+    std::fs::write(&source, "int cuInit(unsigned int flags) { return 0; }\nint cuDeviceGetCount(int *n) { *n = 1; return 0; }\n")
+        .expect("the stand-in's source");
+    let built = std::process::Command::new("cc")
+        .args(["-shared", "-fPIC", "-o"])
+        .arg(dir.join("libcuda.so"))
+        .arg(&source)
+        .status()
+        .expect("cc runs (Rust links with it)");
+    assert!(built.success());
+    std::fs::copy(dir.join("libcuda.so"), dir.join("libcuda.so.1")).expect("the versioned name too");
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    let run = |backend: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_coil"))
+            .arg("run")
+            .arg(&scene)
+            .args(["--backend", backend, "--overwrite", "--set", "simulation.end_time_s=0.001", "--set"])
+            .arg("material.particle_spacing_m=0.04")
+            .arg("--out")
+            .arg(dir.join(format!("out-{backend}")))
+            .env("LD_LIBRARY_PATH", &dir)
+            .output()
+            .expect("coil runs")
+    };
+    let cuda = run("cuda");
+    let stderr = String::from_utf8_lossy(&cuda.stderr);
+    assert_eq!(cuda.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("the CUDA driver lacks cu") && stderr.contains("--backend cpu"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let auto = run("auto");
+    let stderr = String::from_utf8_lossy(&auto.stderr);
+    assert!(auto.status.success(), "{stderr}");
+    assert!(stderr.contains("backend: cpu (the CUDA driver lacks cu"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}

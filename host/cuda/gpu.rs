@@ -24,11 +24,61 @@ pub const PTX: &str = include_str!(concat!(env!("OUT_DIR"), "/coil_kernels.ptx")
 /// Threads per block of every launch.
 const BLOCK: u32 = 256;
 
+/// The driver functions coil's calls reach through cudarc. cudarc looks each up at its first call
+/// and panics where the driver lacks it, so [`Gpu::open`] looks them all up first: a driver too
+/// old for one (the stream-ordered allocator came with CUDA 11.2) gives an error, not a panic
+/// in the middle of a run. The CUDA tests check the list against what the build links.
+pub const DRIVER_FUNCTIONS: &[&str] = &[
+    "cuCtxDestroy_v2",
+    "cuCtxGetCurrent",
+    "cuCtxSetCurrent",
+    "cuDeviceGet",
+    "cuDeviceGetAttribute",
+    "cuDeviceGetCount",
+    "cuDeviceGetName",
+    "cuDevicePrimaryCtxRelease_v2",
+    "cuDevicePrimaryCtxRetain",
+    "cuEventCreate",
+    "cuEventDestroy_v2",
+    "cuEventElapsedTime",
+    "cuEventRecord",
+    "cuEventSynchronize",
+    "cuGetErrorString",
+    "cuInit",
+    "cuLaunchKernel",
+    "cuMemAllocAsync",
+    "cuMemAlloc_v2",
+    "cuMemFreeAsync",
+    "cuMemFree_v2",
+    "cuMemGetInfo_v2",
+    "cuMemcpyDtoDAsync_v2",
+    "cuMemcpyDtoHAsync_v2",
+    "cuMemcpyHtoDAsync_v2",
+    "cuMemcpyPeerAsync",
+    "cuMemsetD8Async",
+    "cuModuleGetFunction",
+    "cuModuleLoad",
+    "cuModuleLoadData",
+    "cuModuleUnload",
+    "cuStreamDestroy_v2",
+    "cuStreamSynchronize",
+    "cuStreamWaitEvent",
+];
+
+/// The first of [`DRIVER_FUNCTIONS`] the driver library lacks.
+fn missing_driver_function() -> Option<&'static str> {
+    // SAFETY: only called once `is_culib_present` found the library; looks symbols up, calls none.
+    let library = unsafe { sys::culib() };
+    DRIVER_FUNCTIONS.iter().copied().find(|name| unsafe { library.get::<*const std::ffi::c_void>(name.as_bytes()) }.is_err())
+}
+
 /// Why the CUDA backend cannot run.
 #[derive(Debug)]
 pub enum CudaError {
     /// No CUDA driver library (libcuda) on this machine.
     NoDriver,
+    /// The driver library lacks a function coil calls: an older driver.
+    OldDriver(&'static str),
     /// The driver loaded but reports no device.
     NoDevice,
     /// A device allocation failed.
@@ -48,6 +98,10 @@ impl fmt::Display for CudaError {
         match self {
             CudaError::NoDriver => f.write_str(
                 "no CUDA driver: libcuda.so was not found (install the NVIDIA driver, or add its folder to LD_LIBRARY_PATH); use --backend cpu",
+            ),
+            CudaError::OldDriver(function) => write!(
+                f,
+                "the CUDA driver lacks {function}, which coil calls: it is older than coil needs (CUDA 11.2 or newer); update the NVIDIA driver, or use --backend cpu"
             ),
             CudaError::NoDevice => f.write_str("the CUDA driver reports no device; use --backend cpu"),
             CudaError::OutOfMemory { what, bytes, free, total } => write!(
@@ -163,12 +217,15 @@ pub struct KernelTime {
 }
 
 impl Gpu {
-    /// Opens device 0 and loads the kernels. Checks for the driver library first: cudarc's
-    /// loader panics without it.
+    /// Opens device 0 and loads the kernels. Checks for the driver library and its functions
+    /// first: cudarc's loader panics without them.
     pub fn open() -> Result<Self, CudaError> {
         // SAFETY: only tries to open the library.
         if !unsafe { sys::is_culib_present() } {
             return Err(CudaError::NoDriver);
+        }
+        if let Some(function) = missing_driver_function() {
+            return Err(CudaError::OldDriver(function));
         }
         let count = CudaContext::device_count().map_err(|error| match error.0 {
             sys::cudaError_enum::CUDA_ERROR_NO_DEVICE => CudaError::NoDevice,

@@ -65,8 +65,8 @@ pub fn density_rate<R: Real, N: Neighbors>(i: usize, a: &ContinuityArgs<R, N>) -
 }
 
 /// The density rate pass for particle `i`: fluid particles get their d rho / dt, fixed
-/// boundary particles their density by [`boundary_density`] with kernel `K`. Race-free: fluid particles read only fluid densities, which this
-/// pass does not write.
+/// boundary particles their density by [`boundary_density`] with kernel `K`. Race-free: fluid
+/// particles read only fluid densities, which this pass does not write.
 #[inline(always)]
 pub fn continuity_pass<R: Real, K: DensityKernel, N: Neighbors>(i: usize, a: &ContinuityArgs<R, N>) {
     // SAFETY: invocation i owns entry i of both outputs.
