@@ -1,6 +1,8 @@
-//! With the `cuda` feature, compiles the `kernels` crate to PTX with the nightly toolchain's
-//! `nvptx64-nvidia-cuda` target and leaves it in `OUT_DIR/coil_kernels.ptx`, which
-//! `host/cuda/module.rs` embeds. A default build needs neither nightly nor CUDA.
+//! With the `cuda` feature, compiles the `kernels` crate to PTX with the `nvptx64-nvidia-cuda`
+//! target of the dated nightly toolchain that `kernels/nvptx-toolchain` names (the kernels call
+//! NVPTX intrinsics by name, which a later nightly may rename) and leaves it in
+//! `OUT_DIR/coil_kernels.ptx`, which `host/cuda/module.rs` embeds. A default build needs neither
+//! nightly nor CUDA.
 //!
 //! `COIL_PTX_TARGET_CPU` picks the PTX target (default `sm_70`; the driver JIT-compiles it for
 //! newer GPUs).
@@ -9,7 +11,15 @@ use std::env;
 use std::path::{Path, PathBuf};
 use std::process::{exit, Command};
 
-const INSTALL: &str = "rustup toolchain install nightly --profile minimal --component rust-src";
+/// The nightly toolchain the kernels are compiled with, as `kernels/nvptx-toolchain` names it.
+fn toolchain() -> &'static str {
+    include_str!("kernels/nvptx-toolchain").trim()
+}
+
+/// The command that installs it.
+fn install() -> String {
+    format!("rustup toolchain install {} --profile minimal --component rust-src", toolchain())
+}
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
@@ -27,7 +37,7 @@ fn main() {
     let target_dir = out.join("ptx-build");
     let mut cargo = Command::new("rustup");
     cargo
-        .args(["run", "nightly", "cargo", "rustc", "-p", "coil-kernels", "--profile", "ptx"])
+        .args(["run", toolchain(), "cargo", "rustc", "-p", "coil-kernels", "--profile", "ptx"])
         .args(["--target", "nvptx64-nvidia-cuda", "-Zbuild-std=core", "--crate-type", "cdylib"])
         .arg("--manifest-path")
         .arg(root.join("Cargo.toml"))
@@ -61,7 +71,7 @@ fn main() {
             cargo.env_remove(&*key);
         }
     }
-    let status = cargo.status().unwrap_or_else(|e| fail(&format!("cannot start `rustup run nightly cargo`: {e}")));
+    let status = cargo.status().unwrap_or_else(|e| fail(&format!("cannot start `rustup run {} cargo`: {e}", toolchain())));
     if !status.success() {
         fail("compiling the kernels to PTX failed (see the errors above)");
     }
@@ -71,15 +81,16 @@ fn main() {
 
 fn require_nightly_with_rust_src() {
     let installed = Command::new("rustup")
-        .args(["+nightly", "component", "list", "--installed"])
+        .arg(format!("+{}", toolchain()))
+        .args(["component", "list", "--installed"])
         .output()
         .ok()
         .filter(|o| o.status.success())
         .map(|o| String::from_utf8_lossy(&o.stdout).lines().any(|l| l.starts_with("rust-src")));
     match installed {
         Some(true) => {}
-        Some(false) => fail(&format!("the `cuda` feature needs rust-src for the nightly toolchain; install it with: {INSTALL}")),
-        None => fail(&format!("the `cuda` feature compiles the kernels with the nightly toolchain; install it with: {INSTALL}")),
+        Some(false) => fail(&format!("the `cuda` feature needs rust-src for {}; install it with: {}", toolchain(), install())),
+        None => fail(&format!("the `cuda` feature compiles the kernels with {}; install it with: {}", toolchain(), install())),
     }
 }
 
