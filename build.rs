@@ -1,7 +1,7 @@
 //! With the `cuda` feature, compiles the `kernels` crate to PTX with the `nvptx64-nvidia-cuda`
 //! target of the dated nightly toolchain that `kernels/nvptx-toolchain` names (the kernels call
 //! NVPTX intrinsics by name, which a later nightly may rename) and leaves it in
-//! `OUT_DIR/coil_kernels.ptx`, which `host/cuda/module.rs` embeds. A default build needs neither
+//! `OUT_DIR/coil_kernels.ptx`, which `host/cuda/gpu.rs` embeds. A default build needs neither
 //! nightly nor CUDA.
 //!
 //! `COIL_PTX_TARGET_CPU` picks the PTX target (default `sm_70`; the driver JIT-compiles it for

@@ -180,6 +180,90 @@ fn ptx_entry_parameters_match_the_host_argument_layouts() {
     assert_eq!(ptx.len(), expected.len(), "an entry without a layout check: {:?}", ptx.keys());
 }
 
+/// The words of the u32 array `name` the PTX defines, from its bytes (little-endian; the
+/// initializer leaves trailing zero bytes out).
+fn ptx_words(name: &str) -> Vec<u32> {
+    let declared = format!(" {name}[");
+    let line = PTX
+        .lines()
+        .find(|l| l.starts_with(".visible .global") && l.contains(&declared))
+        .unwrap_or_else(|| panic!("the PTX defines no {name}"));
+    let length = &line[line.find(&declared).expect("found") + declared.len()..];
+    let length: usize = length[..length.find(']').expect("a closing bracket")].parse().expect("a byte count");
+    let mut bytes: Vec<u8> = line[line.find('{').expect("an initializer") + 1..line.rfind('}').expect("its end")]
+        .split(',')
+        .map(|b| b.trim().parse().expect("a byte"))
+        .collect();
+    assert!(bytes.len() <= length, "{name}: {} bytes in an array of {length}", bytes.len());
+    bytes.resize(length, 0);
+    bytes.chunks(4).map(|w| u32::from_le_bytes(w.try_into().expect("whole words"))).collect()
+}
+
+/// Size, alignment and every field's offset of each struct a kernel takes, as the nightly lays
+/// them out for nvptx64 (exported in the PTX) and as the host's compiler does: a field the two
+/// order or pad differently would read another field's bytes on a GPU, whatever the sizes say.
+#[test]
+fn device_and_host_lay_out_every_argument_struct_alike() {
+    use coil_kernels::abi::{layouts, LAYOUT_NAMES, LAYOUT_WORDS};
+    for (precision, device, host) in
+        [("f32", ptx_words("COIL_LAYOUTS_F32"), layouts::<f32>()), ("f64", ptx_words("COIL_LAYOUTS_F64"), layouts::<f64>())]
+    {
+        assert_eq!(device.len(), LAYOUT_WORDS, "{precision}: the device's table has another length: a stale PTX?");
+        let mut k = 0;
+        for (name, fields) in LAYOUT_NAMES {
+            let what = ["size", "alignment"].into_iter().chain(fields.iter().copied());
+            for (word, what) in what.enumerate() {
+                assert_eq!(
+                    device[k + word],
+                    host[k + word],
+                    "{name} at {precision}: {what} is {} bytes on the device and {} on the host",
+                    device[k + word],
+                    host[k + word]
+                );
+            }
+            k += 2 + fields.len();
+        }
+        assert_eq!(k, LAYOUT_WORDS);
+    }
+}
+
+/// Every `repr(C)` struct of the kernels crate is in the layout table, but those only the CPU
+/// backend reads (its neighbor lists), so a new argument struct cannot go unchecked.
+#[test]
+fn the_layout_table_lists_every_repr_c_struct() {
+    let cpu_only = ["NeighborListArgs", "ListedNeighborhood"];
+    let listed: Vec<&str> = coil_kernels::abi::LAYOUT_NAMES
+        .iter()
+        .map(|(name, _)| match *name {
+            "O" | "P" => "Neighborhood",
+            name => name.split('<').next().expect("a name").trim(),
+        })
+        .collect();
+    let mut sources = vec![Path::new(env!("CARGO_MANIFEST_DIR")).join("kernels/src")];
+    let mut checked = 0;
+    while let Some(path) = sources.pop() {
+        if path.is_dir() {
+            sources.extend(std::fs::read_dir(&path).expect("a source folder").map(|e| e.expect("an entry").path()));
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).expect("a source file");
+        for (at, _) in text.match_indices("#[repr(C)]") {
+            let after = &text[at..];
+            let name = after[after.find("pub struct ").expect("a struct after repr(C)") + 11..]
+                .split(|c: char| !c.is_alphanumeric() && c != '_')
+                .next()
+                .expect("a name");
+            checked += 1;
+            assert!(
+                listed.contains(&name) || cpu_only.contains(&name),
+                "{name} ({}) is repr(C) but not in coil_kernels::abi's table",
+                path.display()
+            );
+        }
+    }
+    assert!(checked > 50, "only {checked} repr(C) structs found");
+}
+
 /// The emulated device knows every PTX entry by its name, and no other.
 #[test]
 fn every_ptx_entry_has_its_host_build() {
@@ -1263,45 +1347,127 @@ fn the_driver_functions_looked_up_at_open_are_all_that_the_build_calls() {
     assert!(missing.is_empty(), "linked but not looked up at open: {missing:?}");
 }
 
-/// A driver library that lacks most functions (a stand-in libcuda.so built here with `cc`,
-/// found first through LD_LIBRARY_PATH) gives `--backend cuda` a clear error naming the first
-/// missing function, and `--backend auto` the CPU with that reason: never a panic.
-#[test]
-fn an_old_driver_is_an_error_not_a_panic() {
-    let dir = std::env::temp_dir().join(format!("coil-old-driver-{}", std::process::id()));
+/// A fresh folder holding a stand-in `libcuda.so`, compiled with `cc` from C `source`.
+fn stand_in_driver(name: &str, source: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("coil-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("a folder for the stand-in driver");
-    let source = dir.join("cuda.c");
-    std::fs::write(&source, "int cuInit(unsigned int flags) { return 0; }\nint cuDeviceGetCount(int *n) { *n = 1; return 0; }\n")
-        .expect("the stand-in's source");
+    let file = dir.join("cuda.c");
+    std::fs::write(&file, source).expect("the stand-in's source");
     let built = std::process::Command::new("cc")
         .args(["-shared", "-fPIC", "-o"])
         .arg(dir.join("libcuda.so"))
-        .arg(&source)
+        .arg(&file)
         .status()
         .expect("cc runs (Rust links with it)");
     assert!(built.success());
     std::fs::copy(dir.join("libcuda.so"), dir.join("libcuda.so.1")).expect("the versioned name too");
-    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
-    let run = |backend: &str| {
-        std::process::Command::new(env!("CARGO_BIN_EXE_coil"))
-            .arg("run")
-            .arg(&scene)
-            .args(["--backend", backend, "--overwrite", "--set", "simulation.end_time_s=0.001", "--set"])
-            .arg("material.particle_spacing_m=0.04")
-            .arg("--out")
-            .arg(dir.join(format!("out-{backend}")))
-            .env("LD_LIBRARY_PATH", &dir)
-            .output()
-            .expect("coil runs")
-    };
-    let cuda = run("cuda");
+    dir
+}
+
+/// `coil run` of a short dam break on `backend`, the stand-in driver in `dir` found first
+/// (LD_LIBRARY_PATH), with `env` set.
+fn run_on_stand_in(dir: &Path, backend: &str, env: &[(&str, &str)]) -> std::process::Output {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    std::process::Command::new(env!("CARGO_BIN_EXE_coil"))
+        .arg("run")
+        .arg(&scene)
+        .args(["--backend", backend, "--overwrite", "--set", "simulation.end_time_s=0.001", "--set"])
+        .arg("material.particle_spacing_m=0.04")
+        .arg("--out")
+        .arg(dir.join(format!("out-{backend}")))
+        .env("LD_LIBRARY_PATH", dir)
+        .envs(env.iter().copied())
+        .output()
+        .expect("coil runs")
+}
+
+/// A driver library that lacks most functions (a stand-in built here with `cc`) gives
+/// `--backend cuda` a clear error naming the first missing function, and `--backend auto` the
+/// CPU with that reason: never a panic.
+#[test]
+fn an_old_driver_is_an_error_not_a_panic() {
+    let dir = stand_in_driver(
+        "old-driver",
+        "int cuInit(unsigned int flags) { return 0; }\nint cuDeviceGetCount(int *n) { *n = 1; return 0; }\n",
+    );
+    let cuda = run_on_stand_in(&dir, "cuda", &[]);
     let stderr = String::from_utf8_lossy(&cuda.stderr);
     assert_eq!(cuda.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("the CUDA driver lacks cu") && stderr.contains("--backend cpu"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
-    let auto = run("auto");
+    let auto = run_on_stand_in(&dir, "auto", &[]);
     let stderr = String::from_utf8_lossy(&auto.stderr);
     assert!(auto.status.success(), "{stderr}");
     assert!(stderr.contains("backend: cpu (the CUDA driver lacks cu"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// What the JIT log of [`a_driver_that_refuses_the_ptx_shows_its_jit_log`] says.
+const JIT_LOG: &str = "ptxas application ptx input, line 3; fatal   : Unsupported .version 7.0; current version is '6.4'";
+
+/// A driver with every function coil calls, as far as opening a device and loading a module:
+/// a device (as many as FAKE_CUDA_DEVICES says, default 1) and a context, then a module load
+/// that fails as a driver too old for the PTX does, writing `JIT_LOG` where given a log buffer
+/// (CU_JIT_ERROR_LOG_BUFFER = 5, its size = 6). The rest succeed and do nothing.
+fn refusing_driver_source() -> String {
+    let special = [
+        "cuInit",
+        "cuDeviceGetCount",
+        "cuDeviceGet",
+        "cuDevicePrimaryCtxRetain",
+        "cuCtxGetCurrent",
+        "cuDeviceGetAttribute",
+        "cuModuleLoadData",
+        "cuModuleLoadDataEx",
+        "cuGetErrorString",
+    ];
+    let mut source = format!(
+        r#"#include <stdlib.h>
+#include <string.h>
+int cuInit(unsigned flags) {{ return 0; }}
+int cuDeviceGetCount(int *n) {{ const char *d = getenv("FAKE_CUDA_DEVICES"); *n = d ? atoi(d) : 1; return 0; }}
+int cuDeviceGet(int *device, int ordinal) {{ *device = ordinal; return 0; }}
+int cuDevicePrimaryCtxRetain(void **ctx, int device) {{ *ctx = (void *)16; return 0; }}
+int cuCtxGetCurrent(void **ctx) {{ *ctx = (void *)16; return 0; }}
+int cuDeviceGetAttribute(int *value, int attribute, int device) {{ *value = 1; return 0; }}
+int cuModuleLoadData(void **module, const void *image) {{ return 218; }}
+int cuModuleLoadDataEx(void **module, const void *image, unsigned n, int *options, void **values) {{
+    char *log = 0; size_t size = 0;
+    for (unsigned k = 0; k < n; k++) {{
+        if (options[k] == 5) log = values[k];
+        if (options[k] == 6) size = (size_t)values[k];
+    }}
+    if (log && size > 0) {{ strncpy(log, "{JIT_LOG}", size - 1); log[size - 1] = 0; }}
+    return 218;
+}}
+int cuGetErrorString(int error, const char **text) {{ *text = "a PTX JIT compilation failed"; return 0; }}
+"#
+    );
+    for name in coil::cuda::gpu::DRIVER_FUNCTIONS.iter().filter(|f| !special.contains(f)) {
+        source += &format!("int {name}() {{ return 0; }}\n");
+    }
+    source
+}
+
+/// A driver that refuses the PTX (as one older than its ISA does) gives `--backend cuda` an
+/// error with the JIT compiler's own words, from the log buffer of a second load; one with no
+/// device says so. Both exit 2, and `--backend auto` runs on the CPU instead.
+#[test]
+fn a_driver_that_refuses_the_ptx_shows_its_jit_log() {
+    let dir = stand_in_driver("refusing-driver", &refusing_driver_source());
+    let cuda = run_on_stand_in(&dir, "cuda", &[]);
+    let stderr = String::from_utf8_lossy(&cuda.stderr);
+    assert_eq!(cuda.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("could not load coil's PTX"), "{stderr}");
+    assert!(stderr.contains(&format!("its JIT compiler says: {JIT_LOG}")), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let auto = run_on_stand_in(&dir, "auto", &[]);
+    let stderr = String::from_utf8_lossy(&auto.stderr);
+    assert!(auto.status.success(), "{stderr}");
+    assert!(stderr.contains("backend: cpu (the CUDA driver could not load coil's PTX"), "{stderr}");
+    let none = run_on_stand_in(&dir, "cuda", &[("FAKE_CUDA_DEVICES", "0")]);
+    let stderr = String::from_utf8_lossy(&none.stderr);
+    assert_eq!(none.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("the CUDA driver reports no device"), "{stderr}");
     std::fs::remove_dir_all(&dir).ok();
 }

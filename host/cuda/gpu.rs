@@ -59,6 +59,7 @@ pub const DRIVER_FUNCTIONS: &[&str] = &[
     "cuModuleGetFunction",
     "cuModuleLoad",
     "cuModuleLoadData",
+    "cuModuleLoadDataEx",
     "cuModuleUnload",
     "cuStreamDestroy_v2",
     "cuStreamSynchronize",
@@ -72,6 +73,31 @@ fn missing_driver_function() -> Option<&'static str> {
     DRIVER_FUNCTIONS.iter().copied().find(|name| unsafe { library.get::<*const std::ffi::c_void>(name.as_bytes()) }.is_err())
 }
 
+/// What the driver's JIT compiler says when it refuses `ptx`, the context current: cudarc's load
+/// passes no log buffer, so a refused module is loaded once more with one. `None` where the load
+/// succeeds or the log is empty.
+fn jit_error_log(ptx: &str) -> Option<String> {
+    const LOG_BYTES: usize = 16 * 1024;
+    let source = std::ffi::CString::new(ptx).ok()?;
+    let mut log = vec![0u8; LOG_BYTES];
+    let mut options = [sys::CUjit_option::CU_JIT_ERROR_LOG_BUFFER, sys::CUjit_option::CU_JIT_ERROR_LOG_BUFFER_SIZE_BYTES];
+    // The driver reads the buffer's size from the pointer-sized value itself.
+    let mut values = [log.as_mut_ptr().cast::<std::ffi::c_void>(), LOG_BYTES as *mut std::ffi::c_void];
+    let mut module = std::ptr::null_mut();
+    // SAFETY: the options and their values are paired as the driver reads them, the log buffer
+    // is LOG_BYTES long and outlives the call, and `Gpu::open` found the function.
+    let result =
+        unsafe { sys::cuModuleLoadDataEx(&mut module, source.as_ptr().cast(), 2, options.as_mut_ptr(), values.as_mut_ptr()) };
+    if result == sys::CUresult::CUDA_SUCCESS {
+        // SAFETY: the module just loaded and nothing else holds it.
+        unsafe { sys::cuModuleUnload(module) };
+        return None;
+    }
+    let end = log.iter().position(|&b| b == 0).unwrap_or(LOG_BYTES);
+    let text = String::from_utf8_lossy(&log[..end]).trim().to_string();
+    (!text.is_empty()).then_some(text)
+}
+
 /// Why the CUDA backend cannot run.
 #[derive(Debug)]
 pub enum CudaError {
@@ -83,8 +109,8 @@ pub enum CudaError {
     NoDevice,
     /// A device allocation failed.
     OutOfMemory { what: String, bytes: usize, free: usize, total: usize },
-    /// The driver refused the PTX module.
-    PtxLoad(DriverError),
+    /// The driver refused the PTX module; `log` is its JIT compiler's error log, where it wrote one.
+    PtxLoad { error: DriverError, log: Option<String> },
     /// A kernel is missing from the PTX module.
     MissingKernel(String),
     /// A launch, or the work queued before a synchronisation, failed.
@@ -108,8 +134,12 @@ impl fmt::Display for CudaError {
                 f,
                 "out of device memory allocating {what}: {bytes} bytes needed, {free} of {total} bytes free; lower the particle count (spacing, max_fluid_particles)"
             ),
-            CudaError::PtxLoad(e) => {
-                write!(f, "the CUDA driver could not load coil's PTX ({e}); the driver may be older than the PTX ISA, set COIL_PTX_TARGET_CPU and rebuild")
+            CudaError::PtxLoad { error, log } => {
+                write!(f, "the CUDA driver could not load coil's PTX ({error})")?;
+                if let Some(log) = log {
+                    write!(f, "; its JIT compiler says: {log}")?;
+                }
+                f.write_str("; the driver may be older than the PTX ISA: update it, or set COIL_PTX_TARGET_CPU and rebuild")
             }
             CudaError::MissingKernel(name) => write!(f, "kernel {name} is missing from coil's PTX module (a stale build?)"),
             CudaError::Launch { kernel, error } => write!(
@@ -128,7 +158,8 @@ impl std::error::Error for CudaError {}
 #[repr(transparent)]
 pub struct ByValue<T>(pub T);
 // SAFETY: every argument struct of `coil_kernels::ptx` is `#[repr(C)]` plain data (numbers and
-// device pointers), laid out alike on the host and on nvptx64.
+// device pointers), laid out alike on the host and on nvptx64 (`coil_kernels::abi`: the CUDA tests
+// compare the two compilers' layouts field by field).
 unsafe impl<T: Copy> DeviceRepr for ByValue<T> {}
 
 /// A CUDA device, through the driver.
@@ -239,7 +270,8 @@ impl Gpu {
         // SAFETY: no buffer is used from a second stream.
         unsafe { ctx.disable_event_tracking() };
         let stream = ctx.default_stream();
-        let module = ctx.load_module(Ptx::from_src(PTX)).map_err(CudaError::PtxLoad)?;
+        let module =
+            ctx.load_module(Ptx::from_src(PTX)).map_err(|error| CudaError::PtxLoad { error, log: jit_error_log(PTX) })?;
         let sync_each_launch = std::env::var("COIL_CUDA_SYNC").is_ok_and(|v| v == "1");
         let device = Device { ctx, stream, module, functions: HashMap::new() };
         Ok(Self { engine: Engine::Cuda(device), sync_each_launch, last_kernel: "(none)", profile: None })

@@ -14,8 +14,8 @@ use core::sync::atomic::{AtomicU32, Ordering};
 #[repr(C)]
 #[derive(Debug)]
 pub struct Counters<'a> {
-    ptr: *const AtomicU32,
-    len: usize,
+    pub(crate) ptr: *const AtomicU32,
+    pub(crate) len: usize,
     _life: PhantomData<&'a [AtomicU32]>,
 }
 impl Clone for Counters<'_> {

@@ -35,6 +35,7 @@
 #[cfg(not(target_arch = "nvptx64"))]
 extern crate std;
 
+pub mod abi;
 pub mod acceleration;
 pub mod cell_grid;
 pub mod continuity_molteni2009;

@@ -56,6 +56,15 @@ fn panic(_: &core::panic::PanicInfo) -> ! {
     unsafe { core::arch::nvptx::trap() }
 }
 
+/// The device's layouts of the kernels' argument structs (`crate::abi`), for the host to compare
+/// with its own in the PTX.
+#[cfg(target_arch = "nvptx64")]
+#[no_mangle]
+pub static COIL_LAYOUTS_F32: [u32; crate::abi::LAYOUT_WORDS] = crate::abi::layouts::<f32>();
+#[cfg(target_arch = "nvptx64")]
+#[no_mangle]
+pub static COIL_LAYOUTS_F64: [u32; crate::abi::LAYOUT_WORDS] = crate::abi::layouts::<f64>();
+
 /// This thread's index in a 1-D launch.
 #[cfg(target_arch = "nvptx64")]
 #[inline(always)]

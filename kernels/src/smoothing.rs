@@ -11,11 +11,11 @@ pub struct SmoothingKernels<R> {
     pub h: R,
     /// h^2 (m^2).
     pub h2: R,
-    poly6_coefficient: R,
-    spiky_coefficient: R,
-    spiky_gradient_coefficient: R,
-    viscosity_laplacian_coefficient: R,
-    morris_laplacian_coefficient: R,
+    pub(crate) poly6_coefficient: R,
+    pub(crate) spiky_coefficient: R,
+    pub(crate) spiky_gradient_coefficient: R,
+    pub(crate) viscosity_laplacian_coefficient: R,
+    pub(crate) morris_laplacian_coefficient: R,
 }
 
 impl<R: Real> SmoothingKernels<R> {

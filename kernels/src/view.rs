@@ -32,8 +32,8 @@ fn out_of_bounds(i: usize, len: usize) -> ! {
 #[repr(C)]
 #[derive(Debug)]
 pub struct View<'a, T> {
-    ptr: *const T,
-    len: usize,
+    pub(crate) ptr: *const T,
+    pub(crate) len: usize,
     _life: PhantomData<&'a [T]>,
 }
 
@@ -89,8 +89,8 @@ impl<'a, T: Copy> View<'a, T> {
 #[repr(C)]
 #[derive(Debug)]
 pub struct ViewMut<'a, T> {
-    ptr: *mut T,
-    len: usize,
+    pub(crate) ptr: *mut T,
+    pub(crate) len: usize,
     _life: PhantomData<&'a mut [T]>,
 }
 
