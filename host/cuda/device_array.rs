@@ -61,6 +61,11 @@ impl<T: Copy> DeviceArray<T> {
         gpu.clear(&mut self.bytes)
     }
 
+    /// Poisons the array on the emulated device ([`Gpu::poison`]).
+    pub fn poison(&mut self, gpu: &Gpu) {
+        gpu.poison(&mut self.bytes)
+    }
+
     /// A kernel view of the first `len` elements. Only the device dereferences it.
     pub fn view(&self, len: usize) -> View<'static, T> {
         assert!(len <= self.len);

@@ -98,6 +98,23 @@ fn jit_error_log(ptx: &str) -> Option<String> {
     (!text.is_empty()).then_some(text)
 }
 
+/// 0..n in an order drawn from `seed` (Fisher-Yates over a splitmix64 stream).
+fn shuffled(n: usize, seed: u64) -> Vec<usize> {
+    let mut state = seed;
+    let mut next = move || {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    };
+    let mut order: Vec<usize> = (0..n).collect();
+    for k in (1..n).rev() {
+        order.swap(k, (next() % (k as u64 + 1)) as usize);
+    }
+    order
+}
+
 /// Why the CUDA backend cannot run.
 #[derive(Debug)]
 pub enum CudaError {
@@ -174,15 +191,17 @@ struct Device {
 enum Engine {
     Cuda(Device),
     /// The kernels' host builds, over host memory.
-    Emulated(EmulatedMemory),
+    Emulated(Emulator),
 }
 
-/// The emulated device's memory: what its buffers hold, against a size where one is set.
-struct EmulatedMemory {
+/// The emulated device: what its buffers hold, against a size where one is set, and the
+/// launches it has run, which seed each launch's thread order.
+struct Emulator {
     /// Bytes allocated and not yet freed; shared with the buffers, which give theirs back.
     used: Arc<AtomicUsize>,
     /// The device's size (bytes); `None` for as much as the host has.
     total: Option<usize>,
+    launches: u64,
 }
 
 pub struct Gpu {
@@ -278,8 +297,8 @@ impl Gpu {
     }
 
     /// A device emulated on the host, for testing the backend where no GPU is: every launch
-    /// runs the kernels' host builds over all threads of its grid, in parallel and in no
-    /// particular order, as a device would.
+    /// runs the kernels' host builds over all threads of its grid, in parallel, its blocks and
+    /// the threads of each in an order shuffled afresh each launch, as a device sets none.
     pub fn emulated() -> Self {
         Self::emulate(None)
     }
@@ -291,8 +310,8 @@ impl Gpu {
     }
 
     fn emulate(total: Option<usize>) -> Self {
-        let memory = EmulatedMemory { used: Arc::new(AtomicUsize::new(0)), total };
-        Self { engine: Engine::Emulated(memory), sync_each_launch: false, last_kernel: "(none)", profile: None }
+        let emulator = Emulator { used: Arc::new(AtomicUsize::new(0)), total, launches: 0 };
+        Self { engine: Engine::Emulated(emulator), sync_each_launch: false, last_kernel: "(none)", profile: None }
     }
 
     /// The device's name and compute capability, for logs.
@@ -324,10 +343,10 @@ impl Gpu {
     pub fn memory(&self) -> (usize, usize) {
         match &self.engine {
             Engine::Cuda(d) => d.ctx.mem_get_info().unwrap_or((0, 0)),
-            Engine::Emulated(EmulatedMemory { used, total: Some(total) }) => {
+            Engine::Emulated(Emulator { used, total: Some(total), .. }) => {
                 (total.saturating_sub(used.load(Ordering::Relaxed)), *total)
             }
-            Engine::Emulated(EmulatedMemory { total: None, .. }) => (0, 0),
+            Engine::Emulated(Emulator { total: None, .. }) => (0, 0),
         }
     }
 
@@ -388,6 +407,15 @@ impl Gpu {
                 host.copy_from_slice(&device.host_bytes()[..host.len()]);
                 Ok(())
             }
+        }
+    }
+
+    /// On the emulated device, fills `device` with 0xFF bytes (NaN in every float, u32::MAX in
+    /// every index), so that a kernel or copy that reads what it should not have kept, a scratch
+    /// array after a swap, reads nonsense and fails the tests; a GPU's memory is left as it is.
+    pub fn poison(&self, device: &mut Buffer) {
+        if let (Engine::Emulated(_), device) = (&self.engine, device) {
+            device.host_bytes_mut().fill(0xFF);
         }
     }
 
@@ -525,12 +553,22 @@ impl Gpu {
                     d.stream.synchronize().map_err(|error| CudaError::Launch { kernel: name.into(), error })?;
                 }
             }
-            Engine::Emulated(_) => {
+            Engine::Emulated(emulator) => {
                 let entry: Emulated =
                     ENTRIES.iter().find(|(n, _)| *n == name).ok_or_else(|| CudaError::MissingKernel(name.into()))?.1;
                 let params: Vec<Param> = args.iter().map(|a| a.param()).collect();
-                // SAFETY: as for the device: the caller vouches for the arguments and views.
-                (0..(blocks * BLOCK) as usize).into_par_iter().for_each(|i| unsafe { entry(i, &params) });
+                emulator.launches += 1;
+                let seed = emulator.launches;
+                // A device runs blocks and the warps in them in no set order: each launch
+                // shuffles both, from its own seed, so that a kernel whose result depends on the
+                // order differs from the CPU and fails the tests.
+                let order = shuffled(blocks as usize, seed);
+                order.into_par_iter().for_each(|block| {
+                    for t in shuffled(BLOCK as usize, seed ^ (block as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15)) {
+                        // SAFETY: as for the device: the caller vouches for the arguments and views.
+                        unsafe { entry(block * BLOCK as usize + t, &params) };
+                    }
+                });
             }
         }
         if let Some(start) = start {

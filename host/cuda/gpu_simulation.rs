@@ -672,6 +672,7 @@ impl<R: Real> CudaBackend<R> {
                     &[&count, &order, &ByValue(d.position[a].view(capacity)), &ByValue(d.scratch_f64.view_mut(n))],
                 )?;
                 std::mem::swap(&mut d.position[a], &mut d.scratch_f64);
+                d.scratch_f64.poison(gpu);
                 for field in [&mut d.velocity[a], &mut d.velocity_half[a]] {
                     let sorted = ByValue(d.scratch_real.view_mut(n));
                     gpu.launch(
@@ -680,6 +681,7 @@ impl<R: Real> CudaBackend<R> {
                         &[&count, &order, &ByValue(field.view(capacity)), &sorted],
                     )?;
                     std::mem::swap(field, &mut d.scratch_real);
+                    d.scratch_real.poison(gpu);
                 }
             }
             gpu.launch(
@@ -688,6 +690,7 @@ impl<R: Real> CudaBackend<R> {
                 &[&count, &order, &ByValue(d.id.view(capacity)), &ByValue(d.scratch_u32.view_mut(n))],
             )?;
             std::mem::swap(&mut d.id, &mut d.scratch_u32);
+            d.scratch_u32.poison(gpu);
             if d.density_rate.is_some() {
                 let sorted = ByValue(d.scratch_real.view_mut(n));
                 gpu.launch(
@@ -696,6 +699,7 @@ impl<R: Real> CudaBackend<R> {
                     &[&count, &order, &ByValue(d.density.view(capacity)), &sorted],
                 )?;
                 std::mem::swap(&mut d.density, &mut d.scratch_real);
+                d.scratch_real.poison(gpu);
             }
             let pressure_sums = d.pressure_solve.as_mut().map(|p| &mut p.stiffness_sums[..]).unwrap_or_default();
             let viscous_change = d.implicit.as_mut().map(|i| &mut i.viscous_change[..]).unwrap_or_default();
@@ -708,6 +712,7 @@ impl<R: Real> CudaBackend<R> {
                         &[&count, &order, &ByValue(field.view(capacity)), &sorted],
                     )?;
                     std::mem::swap(field, &mut d.scratch_real);
+                    d.scratch_real.poison(gpu);
                 }
             }
         }
