@@ -7,5 +7,6 @@ pub mod output;
 pub mod run;
 pub mod scene;
 pub mod simulation;
+pub mod splitmix64;
 pub mod statistics;
 pub mod validation;

@@ -5,6 +5,7 @@
 //! a launch runs the kernels' host builds (`coil_kernels::ptx::ENTRIES`) over every thread of
 //! the grid with rayon, so the backend's host side runs and is tested without a GPU.
 
+use crate::splitmix64::{SplitMix64, GOLDEN_GAMMA};
 use coil_kernels::ptx::{Emulated, Param, ENTRIES};
 use cudarc::driver::{
     sys, CudaContext, CudaEvent, CudaFunction, CudaModule, CudaSlice, CudaStream, DevicePtr, DeviceRepr, DriverError,
@@ -98,19 +99,12 @@ fn jit_error_log(ptx: &str) -> Option<String> {
     (!text.is_empty()).then_some(text)
 }
 
-/// 0..n in an order drawn from `seed` (Fisher-Yates over a splitmix64 stream).
+/// 0..n in an order drawn from `seed` (Fisher-Yates over a SplitMix64 stream).
 fn shuffled(n: usize, seed: u64) -> Vec<usize> {
-    let mut state = seed;
-    let mut next = move || {
-        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    };
+    let mut stream = SplitMix64(seed);
     let mut order: Vec<usize> = (0..n).collect();
     for k in (1..n).rev() {
-        order.swap(k, (next() % (k as u64 + 1)) as usize);
+        order.swap(k, (stream.next_u64() % (k as u64 + 1)) as usize);
     }
     order
 }
@@ -564,7 +558,7 @@ impl Gpu {
                 // order differs from the CPU and fails the tests.
                 let order = shuffled(blocks as usize, seed);
                 order.into_par_iter().for_each(|block| {
-                    for t in shuffled(BLOCK as usize, seed ^ (block as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15)) {
+                    for t in shuffled(BLOCK as usize, seed ^ (block as u64 + 1).wrapping_mul(GOLDEN_GAMMA)) {
                         // SAFETY: as for the device: the caller vouches for the arguments and views.
                         unsafe { entry(block * BLOCK as usize + t, &params) };
                     }

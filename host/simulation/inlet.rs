@@ -3,6 +3,7 @@
 //! (`coil_kernels::nozzle`) one support radius upstream of the exit.
 
 use crate::scene::{self, Nozzle, NozzleMotion};
+use crate::splitmix64::{SplitMix64, GOLDEN_GAMMA};
 use coil_kernels::nozzle::NozzleTube;
 use coil_kernels::Real;
 
@@ -40,15 +41,8 @@ pub struct Inlet {
 /// A point of the unit disc for layer `n`, from SplitMix64: the same sequence on every machine
 /// and thread count.
 fn wobble(n: u64) -> [f64; 2] {
-    let mut state = n.wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    let mut next = || {
-        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    };
+    let mut stream = SplitMix64(n.wrapping_mul(GOLDEN_GAMMA));
+    let mut next = || (stream.next_u64() >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0;
     loop {
         let (a, b) = (next(), next());
         if a * a + b * b <= 1.0 {
