@@ -835,6 +835,37 @@ fn to_host<T: Copy + Default>(gpu: &Gpu, a: &DeviceArray<T>, len: usize) -> Vec<
     host
 }
 
+/// The emulated device runs a launch at the next copy or synchronisation, not when the host
+/// queues it, as a GPU's stream does: a host read of device memory that does not wait reads the
+/// bytes from before the launch.
+#[test]
+fn the_emulated_device_runs_launches_when_the_host_waits() {
+    let mut gpu = Gpu::emulated();
+    let n = 1000usize;
+    let array = |values: &[u32]| {
+        let mut a = DeviceArray::<u32>::zeros(&gpu, values.len(), "test array").expect("allocation");
+        a.upload(&gpu, values).expect("upload");
+        a
+    };
+    let count = array(&[n as u32]);
+    let order = array(&(0..n as u32).rev().collect::<Vec<_>>());
+    let unsorted = array(&(0..n as u32).map(|k| 7 * k).collect::<Vec<_>>());
+    let sorted = array(&vec![0; n]);
+    // SAFETY: gather_u32(count, order, unsorted, sorted), each of its length.
+    unsafe {
+        gpu.launch(
+            "gather_u32",
+            n as u32,
+            &[&ByValue(count.view(1)), &ByValue(order.view(n)), &ByValue(unsorted.view(n)), &ByValue(sorted.view_mut(n))],
+        )
+        .expect("launch");
+    }
+    let unwaited = sorted.view(n);
+    assert!((0..n).all(|k| unwaited.at(k) == 0), "the launch ran before the host waited");
+    let gathered = to_host(&gpu, &sorted, n);
+    assert_eq!(gathered, (0..n as u32).rev().map(|k| 7 * k).collect::<Vec<_>>());
+}
+
 /// Each stage of a step, launched alone on random particles, against the CPU: the cell key of
 /// each particle from the same `hash` function, its histogram, the exclusive scan of that (in
 /// chunks of 2 buckets, so the scan of the chunk totals takes two levels), the stable order by
@@ -1347,8 +1378,19 @@ fn the_driver_functions_looked_up_at_open_are_all_that_the_build_calls() {
     assert!(missing.is_empty(), "linked but not looked up at open: {missing:?}");
 }
 
-/// A fresh folder holding a stand-in `libcuda.so`, compiled with `cc` from C `source`.
-fn stand_in_driver(name: &str, source: &str) -> std::path::PathBuf {
+/// The `coil` binary: this build's, or `COIL_BIN` (the GPU bundle's, on a machine without the
+/// build).
+fn coil_binary() -> std::path::PathBuf {
+    std::env::var_os("COIL_BIN").map(Into::into).unwrap_or_else(|| env!("CARGO_BIN_EXE_coil").into())
+}
+
+/// A fresh folder holding a stand-in `libcuda.so`, compiled with `cc` from C `source`; `None`
+/// on a GPU machine (`COIL_REQUIRE_GPU=1`) that has no C compiler.
+fn stand_in_driver(name: &str, source: &str) -> Option<std::path::PathBuf> {
+    if std::env::var_os("COIL_REQUIRE_GPU").is_some() && std::process::Command::new("cc").arg("--version").output().is_err() {
+        eprintln!("skipped: no C compiler for the stand-in driver on this machine");
+        return None;
+    }
     let dir = std::env::temp_dir().join(format!("coil-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("a folder for the stand-in driver");
     let file = dir.join("cuda.c");
@@ -1361,14 +1403,14 @@ fn stand_in_driver(name: &str, source: &str) -> std::path::PathBuf {
         .expect("cc runs (Rust links with it)");
     assert!(built.success());
     std::fs::copy(dir.join("libcuda.so"), dir.join("libcuda.so.1")).expect("the versioned name too");
-    dir
+    Some(dir)
 }
 
 /// `coil run` of a short dam break on `backend`, the stand-in driver in `dir` found first
 /// (LD_LIBRARY_PATH), with `env` set.
 fn run_on_stand_in(dir: &Path, backend: &str, env: &[(&str, &str)]) -> std::process::Output {
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
-    std::process::Command::new(env!("CARGO_BIN_EXE_coil"))
+    std::process::Command::new(coil_binary())
         .arg("run")
         .arg(&scene)
         .args(["--backend", backend, "--overwrite", "--set", "simulation.end_time_s=0.001", "--set"])
@@ -1386,10 +1428,12 @@ fn run_on_stand_in(dir: &Path, backend: &str, env: &[(&str, &str)]) -> std::proc
 /// CPU with that reason: never a panic.
 #[test]
 fn an_old_driver_is_an_error_not_a_panic() {
-    let dir = stand_in_driver(
+    let Some(dir) = stand_in_driver(
         "old-driver",
         "int cuInit(unsigned int flags) { return 0; }\nint cuDeviceGetCount(int *n) { *n = 1; return 0; }\n",
-    );
+    ) else {
+        return;
+    };
     let cuda = run_on_stand_in(&dir, "cuda", &[]);
     let stderr = String::from_utf8_lossy(&cuda.stderr);
     assert_eq!(cuda.status.code(), Some(2), "{stderr}");
@@ -1402,51 +1446,113 @@ fn an_old_driver_is_an_error_not_a_panic() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// What the JIT log of [`a_driver_that_refuses_the_ptx_shows_its_jit_log`] says.
-const JIT_LOG: &str = "ptxas application ptx input, line 3; fatal   : Unsupported .version 7.0; current version is '6.4'";
+/// The stand-in driver of `tests/fake-cuda`, built once (in its own target folder: this test's
+/// cargo holds `target/`'s lock) for the tests that run `coil` on it; on a machine without the
+/// build, the GPU bundle's copy that `COIL_FAKE_CUDA_DIR` names.
+fn fake_driver() -> &'static Path {
+    static DIR: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
+    DIR.get_or_init(|| {
+        if let Some(dir) = std::env::var_os("COIL_FAKE_CUDA_DIR") {
+            return dir.into();
+        }
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let target = root.join("target/fake-cuda");
+        let built = std::process::Command::new(env!("CARGO"))
+            .args(["build", "--release", "--quiet", "-p", "fake-cuda", "--target-dir"])
+            .arg(&target)
+            .current_dir(root)
+            .status()
+            .expect("cargo runs");
+        assert!(built.success(), "the fake driver builds");
+        let dir = target.join("release");
+        std::fs::copy(dir.join("libcuda.so"), dir.join("libcuda.so.1")).expect("the versioned name too");
+        dir
+    })
+}
 
-/// A driver with every function coil calls, as far as opening a device and loading a module:
-/// a device (as many as FAKE_CUDA_DEVICES says, default 1) and a context, then a module load
-/// that fails as a driver too old for the PTX does, writing `JIT_LOG` where given a log buffer
-/// (CU_JIT_ERROR_LOG_BUFFER = 5, its size = 6). The rest succeed and do nothing.
-fn refusing_driver_source() -> String {
-    let special = [
-        "cuInit",
-        "cuDeviceGetCount",
-        "cuDeviceGet",
-        "cuDevicePrimaryCtxRetain",
-        "cuCtxGetCurrent",
-        "cuDeviceGetAttribute",
-        "cuModuleLoadData",
-        "cuModuleLoadDataEx",
-        "cuGetErrorString",
-    ];
-    let mut source = format!(
-        r#"#include <stdlib.h>
-#include <string.h>
-int cuInit(unsigned flags) {{ return 0; }}
-int cuDeviceGetCount(int *n) {{ const char *d = getenv("FAKE_CUDA_DEVICES"); *n = d ? atoi(d) : 1; return 0; }}
-int cuDeviceGet(int *device, int ordinal) {{ *device = ordinal; return 0; }}
-int cuDevicePrimaryCtxRetain(void **ctx, int device) {{ *ctx = (void *)16; return 0; }}
-int cuCtxGetCurrent(void **ctx) {{ *ctx = (void *)16; return 0; }}
-int cuDeviceGetAttribute(int *value, int attribute, int device) {{ *value = 1; return 0; }}
-int cuModuleLoadData(void **module, const void *image) {{ return 218; }}
-int cuModuleLoadDataEx(void **module, const void *image, unsigned n, int *options, void **values) {{
-    char *log = 0; size_t size = 0;
-    for (unsigned k = 0; k < n; k++) {{
-        if (options[k] == 5) log = values[k];
-        if (options[k] == 6) size = (size_t)values[k];
-    }}
-    if (log && size > 0) {{ strncpy(log, "{JIT_LOG}", size - 1); log[size - 1] = 0; }}
-    return 218;
-}}
-int cuGetErrorString(int error, const char **text) {{ *text = "a PTX JIT compilation failed"; return 0; }}
-"#
-    );
-    for name in coil::cuda::gpu::DRIVER_FUNCTIONS.iter().filter(|f| !special.contains(f)) {
-        source += &format!("int {name}() {{ return 0; }}\n");
+/// `coil run` of the dam break at 0.04 m spacing to 4 ms, a frame every 2 ms, on `backend`,
+/// into `out`, the fake driver found first, with `env` set.
+fn run_on_fake(out: &Path, backend: &str, env: &[(&str, &str)]) -> std::process::Output {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
+    std::process::Command::new(coil_binary())
+        .arg("run")
+        .arg(&scene)
+        .args(["--backend", backend, "--overwrite", "--set", "simulation.end_time_s=0.004"])
+        .args(["--set", "output.every_s=0.002", "--set", "material.particle_spacing_m=0.04", "--out"])
+        .arg(out)
+        .env("LD_LIBRARY_PATH", fake_driver())
+        .envs(env.iter().copied())
+        .output()
+        .expect("coil runs")
+}
+
+/// What coil says of how the kernels reached the device, as the build made them.
+fn kernel_code_line() -> &'static str {
+    if coil::cuda::gpu::FATBIN.is_empty() {
+        "kernels JIT-compiled from PTX (built without ptxas)"
+    } else {
+        "kernels compiled ahead of time for sm_90"
     }
-    source
+}
+
+/// Through cudarc and a driver (the fake one: device memory in host memory, work queued until
+/// a synchronisation, the kernels' host builds launched by name with the parameter sizes its
+/// PTX declares), `--backend cuda` writes the CPU's frames byte for byte and says it loaded the
+/// fatbin's sm_90 cubin. Where the driver refuses the fatbin, as one older than the ptxas that
+/// compiled it does, the run JIT-compiles the PTX instead, says why, and writes the same frames.
+#[test]
+fn the_driver_path_writes_the_cpus_frames() {
+    let root = std::env::temp_dir().join(format!("coil-fake-driver-{}", std::process::id()));
+    let cpu = run_on_fake(&root.join("cpu"), "cpu", &[]);
+    assert!(cpu.status.success(), "{}", String::from_utf8_lossy(&cpu.stderr));
+    let frames = files(&root.join("cpu"));
+    assert_eq!(frames.iter().filter(|f| f.0.starts_with("frame_")).count(), 3, "frames at 0, 2 and 4 ms");
+    let cuda = run_on_fake(&root.join("cuda"), "cuda", &[]);
+    let stderr = String::from_utf8_lossy(&cuda.stderr);
+    assert!(cuda.status.success(), "{stderr}");
+    assert!(stderr.contains(&format!("backend: cuda, coil fake CUDA device (sm_90), {}", kernel_code_line())), "{stderr}");
+    assert!(files(&root.join("cuda")) == frames, "the frames through the driver differ from the CPU's");
+    if !coil::cuda::gpu::FATBIN.is_empty() {
+        let refused = run_on_fake(&root.join("refused"), "cuda", &[("FAKE_CUDA_REFUSE", "fatbin")]);
+        let stderr = String::from_utf8_lossy(&refused.stderr);
+        assert!(refused.status.success(), "{stderr}");
+        assert!(
+            stderr.contains("kernels JIT-compiled from PTX (the driver refused the fatbin: ")
+                && stderr.contains("no kernel image is available"),
+            "{stderr}"
+        );
+        assert!(files(&root.join("refused")) == frames, "the frames from the PTX differ from the CPU's");
+    }
+    std::fs::remove_dir_all(&root).ok();
+}
+
+/// The fatbin holds cubins for sm_80 and sm_90 and the PTX (read from its headers), or there is
+/// none and the build says it embeds the PTX alone.
+#[test]
+fn the_fatbin_holds_cubins_for_sm_80_and_sm_90_and_the_ptx() {
+    let fatbin = coil::cuda::gpu::FATBIN;
+    if fatbin.is_empty() {
+        assert_eq!(coil::cuda::gpu::CUBIN_ARCHS, "", "cubins listed without a fatbin");
+        eprintln!("skipped: built without ptxas, the PTX alone");
+        return;
+    }
+    let word = |at: usize| u32::from_le_bytes(fatbin[at..at + 4].try_into().expect("4 bytes"));
+    let long = |at: usize| u64::from_le_bytes(fatbin[at..at + 8].try_into().expect("8 bytes")) as usize;
+    assert_eq!(word(0), 0xBA55_ED50, "the fatbin magic");
+    let header = u16::from_le_bytes([fatbin[6], fatbin[7]]) as usize;
+    assert_eq!(header + long(8), fatbin.len(), "the header's size covers the images");
+    let mut images = Vec::new();
+    let mut at = header;
+    while at < fatbin.len() {
+        let (kind, entry, bytes, sm) =
+            (u16::from_le_bytes([fatbin[at], fatbin[at + 1]]), word(at + 4) as usize, long(at + 8), word(at + 28));
+        let payload = &fatbin[at + entry..at + entry + bytes];
+        images.push((kind, sm, payload.starts_with(b"\x7fELF"), payload.windows(8).any(|w| w == b".version")));
+        at += entry + bytes;
+    }
+    // Kind 2 is a cubin (ELF), 1 the PTX (text), for the PTX target sm_70.
+    assert_eq!(images, [(2, 80, true, false), (2, 90, true, false), (1, 70, false, true)]);
+    assert_eq!(coil::cuda::gpu::CUBIN_ARCHS, "80,90");
 }
 
 /// A driver that refuses the PTX (as one older than its ISA does) gives `--backend cuda` an
@@ -1454,20 +1560,59 @@ int cuGetErrorString(int error, const char **text) {{ *text = "a PTX JIT compila
 /// device says so. Both exit 2, and `--backend auto` runs on the CPU instead.
 #[test]
 fn a_driver_that_refuses_the_ptx_shows_its_jit_log() {
-    let dir = stand_in_driver("refusing-driver", &refusing_driver_source());
-    let cuda = run_on_stand_in(&dir, "cuda", &[]);
+    let root = std::env::temp_dir().join(format!("coil-fake-refusing-{}", std::process::id()));
+    let all = [("FAKE_CUDA_REFUSE", "all")];
+    let cuda = run_on_fake(&root.join("cuda"), "cuda", &all);
     let stderr = String::from_utf8_lossy(&cuda.stderr);
     assert_eq!(cuda.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("could not load coil's PTX"), "{stderr}");
-    assert!(stderr.contains(&format!("its JIT compiler says: {JIT_LOG}")), "{stderr}");
+    assert!(
+        stderr.contains("its JIT compiler says: ptxas application ptx input, line 3; fatal   : Unsupported .version 7.0"),
+        "{stderr}"
+    );
     assert!(!stderr.contains("panicked"), "{stderr}");
-    let auto = run_on_stand_in(&dir, "auto", &[]);
+    let auto = run_on_fake(&root.join("auto"), "auto", &all);
     let stderr = String::from_utf8_lossy(&auto.stderr);
     assert!(auto.status.success(), "{stderr}");
     assert!(stderr.contains("backend: cpu (the CUDA driver could not load coil's PTX"), "{stderr}");
-    let none = run_on_stand_in(&dir, "cuda", &[("FAKE_CUDA_DEVICES", "0")]);
+    let none = run_on_fake(&root.join("none"), "cuda", &[("FAKE_CUDA_DEVICES", "0")]);
     let stderr = String::from_utf8_lossy(&none.stderr);
     assert_eq!(none.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("the CUDA driver reports no device"), "{stderr}");
-    std::fs::remove_dir_all(&dir).ok();
+    std::fs::remove_dir_all(&root).ok();
+}
+
+/// A device that runs out of memory at an allocation stops the run before its first step with
+/// exit 2, naming the array and the device's figures; one that faults (an illegal address,
+/// reported at a synchronisation, as a GPU reports it) stops it with exit 1, naming the kernel
+/// it reached, and keeps the frames written before it, all finite. With `COIL_CUDA_SYNC=1` the
+/// error names the kernel that faulted.
+#[test]
+fn device_faults_give_clear_errors() {
+    let root = std::env::temp_dir().join(format!("coil-fake-faults-{}", std::process::id()));
+    let oom = run_on_fake(&root.join("oom"), "cuda", &[("FAKE_CUDA_OOM_AT", "5")]);
+    let stderr = String::from_utf8_lossy(&oom.stderr);
+    assert_eq!(oom.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("out of device memory allocating ") && stderr.contains("bytes free"), "{stderr}");
+    let out = root.join("fault");
+    let fault = run_on_fake(&out, "cuda", &[("FAKE_CUDA_ILLEGAL_ADDRESS_AT_SYNC", "40")]);
+    let stderr = String::from_utf8_lossy(&fault.stderr);
+    assert_eq!(fault.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("or a kernel before it failed") && stderr.contains("an illegal memory access"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let frames: Vec<_> = files(&out).into_iter().filter(|f| f.0.starts_with("frame_")).collect();
+    assert!(!frames.is_empty(), "the frame at t = 0 is kept");
+    for (name, _) in frames {
+        assert!(read_frame(&out.join(&name)).iter().flatten().all(|x| x.is_finite()), "{name}");
+    }
+    let log = std::fs::read_to_string(out.join("run.json")).expect("run log");
+    assert!(log.contains("\"status\": \"failed\"") && log.contains("illegal memory access"), "{log}");
+    let named =
+        run_on_fake(&root.join("named"), "cuda", &[("FAKE_CUDA_ILLEGAL_ADDRESS_AT_LAUNCH", "200"), ("COIL_CUDA_SYNC", "1")]);
+    let stderr = String::from_utf8_lossy(&named.stderr);
+    let faulted = stderr.lines().find_map(|l| l.strip_prefix("fake CUDA: kernel ")?.strip_suffix(" faulted"));
+    let faulted = faulted.unwrap_or_else(|| panic!("the stand-in names the kernel it faulted: {stderr}"));
+    assert_eq!(named.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains(&format!("error: CUDA kernel {faulted} failed: ")), "{stderr}");
+    std::fs::remove_dir_all(&root).ok();
 }

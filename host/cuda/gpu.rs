@@ -3,7 +3,9 @@
 //!
 //! [`Gpu::emulated`] stands in for a device where there is none: its memory is host memory and
 //! a launch runs the kernels' host builds (`coil_kernels::ptx::ENTRIES`) over every thread of
-//! the grid with rayon, so the backend's host side runs and is tested without a GPU.
+//! the grid with rayon, so the backend's host side runs and is tested without a GPU. As a
+//! device's stream does, it runs launches later than they are queued: at the next copy,
+//! synchronisation or timing mark.
 
 use crate::splitmix64::{SplitMix64, GOLDEN_GAMMA};
 use coil_kernels::ptx::{Emulated, Param, ENTRIES};
@@ -16,11 +18,18 @@ use rayon::prelude::*;
 use std::collections::HashMap;
 use std::fmt;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Instant;
 
 /// The kernels crate as PTX.
 pub const PTX: &str = include_str!(concat!(env!("OUT_DIR"), "/coil_kernels.ptx"));
+
+/// The kernels compiled ahead of time: a fatbin of cubins for [`CUBIN_ARCHS`] and the PTX, which
+/// the driver loads without compiling on those GPUs; empty where the build found no `ptxas`.
+pub const FATBIN: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/coil_kernels.fatbin"));
+
+/// The architectures of [`FATBIN`]'s cubins, as `sm_XY` numbers (`80,90`); empty without one.
+pub const CUBIN_ARCHS: &str = env!("COIL_CUBIN_ARCHS");
 
 /// Threads per block of every launch.
 const BLOCK: u32 = 256;
@@ -179,6 +188,39 @@ struct Device {
     stream: Arc<CudaStream>,
     module: Arc<CudaModule>,
     functions: HashMap<String, CudaFunction>,
+    /// What the driver was given: the fatbin, or the PTX alone and why.
+    code: KernelCode,
+}
+
+/// How the kernels reached the device.
+enum KernelCode {
+    /// [`FATBIN`]: a cubin where one fits the device, the PTX JIT-compiled where none does.
+    Fatbin,
+    /// [`PTX`] alone, JIT-compiled by the driver: the build had no `ptxas`, or the driver refused
+    /// the fatbin (one older than the `ptxas` that compiled it).
+    Ptx { fatbin_refused: Option<DriverError> },
+}
+
+/// Loads the kernels: [`FATBIN`] where the build made one and the driver takes it, else [`PTX`].
+fn load_kernels(ctx: &Arc<CudaContext>) -> Result<(Arc<CudaModule>, KernelCode), CudaError> {
+    let mut fatbin_refused = None;
+    if !FATBIN.is_empty() {
+        match ctx.load_module(Ptx::from_binary(FATBIN.to_vec())) {
+            Ok(module) => return Ok((module, KernelCode::Fatbin)),
+            Err(error) => fatbin_refused = Some(error),
+        }
+    }
+    match ctx.load_module(Ptx::from_src(PTX)) {
+        Ok(module) => Ok((module, KernelCode::Ptx { fatbin_refused })),
+        Err(error) => Err(CudaError::PtxLoad { error, log: jit_error_log(PTX) }),
+    }
+}
+
+/// The cubin of [`CUBIN_ARCHS`] the driver picks for a device of compute capability
+/// `major.minor`: the newest of its major version not above it.
+fn cubin_for(major: i32, minor: i32) -> Option<u32> {
+    let device = (major * 10 + minor) as u32;
+    CUBIN_ARCHS.split(',').filter_map(|a| a.parse::<u32>().ok()).filter(|&a| a / 10 == device / 10 && a <= device).max()
 }
 
 /// What runs the kernels.
@@ -188,14 +230,61 @@ enum Engine {
     Emulated(Emulator),
 }
 
-/// The emulated device: what its buffers hold, against a size where one is set, and the
-/// launches it has run, which seed each launch's thread order.
+/// The emulated device: what its buffers hold, against a size where one is set, the launches
+/// it has queued, which seed each launch's thread order, and the work not yet run.
 struct Emulator {
     /// Bytes allocated and not yet freed; shared with the buffers, which give theirs back.
     used: Arc<AtomicUsize>,
     /// The device's size (bytes); `None` for as much as the host has.
     total: Option<usize>,
     launches: u64,
+    /// Shared with the buffers, whose memory a queued launch may still use when they go.
+    stream: Arc<Mutex<Stream>>,
+}
+
+/// The emulated device's stream: launches queued and not yet run, and the memory of buffers
+/// dropped after them, freed once they have run, as a device frees in stream order.
+#[derive(Default)]
+struct Stream {
+    launches: Vec<QueuedLaunch>,
+    freed: Vec<Box<[u64]>>,
+}
+
+/// A launch as the emulated device queues it: its parameters' bytes copied, as a driver copies
+/// them, so the host may reuse its own.
+struct QueuedLaunch {
+    entry: Emulated,
+    params: Vec<Vec<u8>>,
+    blocks: u32,
+    /// Seeds the order of its blocks and threads.
+    seed: u64,
+}
+
+impl QueuedLaunch {
+    fn run(self) {
+        let params: Vec<Param> = self
+            .params
+            .iter()
+            // SAFETY: the bytes outlive the launch, which returns before they go.
+            .map(|p| unsafe { Param::from_raw(p.as_ptr(), p.len()) })
+            .collect();
+        let (entry, seed) = (self.entry, self.seed);
+        // A device runs blocks and the warps in them in no set order: each launch shuffles
+        // both, from its own seed, so that a kernel whose result depends on the order differs
+        // from the CPU and fails the tests.
+        shuffled(self.blocks as usize, seed).into_par_iter().for_each(|block| {
+            for t in shuffled(BLOCK as usize, seed ^ (block as u64 + 1).wrapping_mul(GOLDEN_GAMMA)) {
+                // SAFETY: as for the device: the caller of `Gpu::launch` vouched for the
+                // arguments and views, whose memory a dropped buffer keeps until this has run.
+                unsafe { entry(block * BLOCK as usize + t, &params) };
+            }
+        });
+    }
+}
+
+/// The stream, locked; a launch that panicked (a kernel's bounds check) left it usable.
+fn lock(stream: &Mutex<Stream>) -> MutexGuard<'_, Stream> {
+    stream.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 pub struct Gpu {
@@ -222,30 +311,37 @@ pub struct HostMemory {
     /// The bytes asked for, which the device counts as in use until the buffer is dropped.
     bytes: usize,
     used: Arc<AtomicUsize>,
+    /// Where a buffer dropped while launches are queued leaves its memory.
+    stream: Arc<Mutex<Stream>>,
 }
 
 // SAFETY: the memory is owned; the run that owns the buffer is the only one to reach it.
 unsafe impl Send for HostMemory {}
 
 impl HostMemory {
-    fn zeroed(bytes: usize, used: &Arc<AtomicUsize>) -> Self {
+    fn zeroed(bytes: usize, emulator: &Emulator) -> Self {
         let words: Box<[u64]> = vec![0; bytes.div_ceil(8).max(1)].into_boxed_slice();
         let len = words.len();
-        used.fetch_add(bytes, Ordering::Relaxed);
-        Self { words: Box::into_raw(words).cast(), len, bytes, used: used.clone() }
+        emulator.used.fetch_add(bytes, Ordering::Relaxed);
+        let (used, stream) = (emulator.used.clone(), emulator.stream.clone());
+        Self { words: Box::into_raw(words).cast(), len, bytes, used, stream }
     }
 }
 
 impl Drop for HostMemory {
     fn drop(&mut self) {
         // SAFETY: `words` came from `Box::into_raw` of `len` words, and is dropped once.
-        drop(unsafe { Box::from_raw(std::ptr::slice_from_raw_parts_mut(self.words, self.len)) });
+        let words = unsafe { Box::from_raw(std::ptr::slice_from_raw_parts_mut(self.words, self.len)) };
+        let mut stream = lock(&self.stream);
+        if !stream.launches.is_empty() {
+            stream.freed.push(words);
+        }
         self.used.fetch_sub(self.bytes, Ordering::Relaxed);
     }
 }
 
 /// A point in a stream's work, for timing: an event on a device, an instant on the emulated
-/// one, whose launches return when they are done.
+/// one, which runs its queued launches first.
 pub enum Mark {
     Event(CudaEvent),
     Instant(Instant),
@@ -283,10 +379,9 @@ impl Gpu {
         // SAFETY: no buffer is used from a second stream.
         unsafe { ctx.disable_event_tracking() };
         let stream = ctx.default_stream();
-        let module =
-            ctx.load_module(Ptx::from_src(PTX)).map_err(|error| CudaError::PtxLoad { error, log: jit_error_log(PTX) })?;
+        let (module, code) = load_kernels(&ctx)?;
         let sync_each_launch = std::env::var("COIL_CUDA_SYNC").is_ok_and(|v| v == "1");
-        let device = Device { ctx, stream, module, functions: HashMap::new() };
+        let device = Device { ctx, stream, module, functions: HashMap::new(), code };
         Ok(Self { engine: Engine::Cuda(device), sync_each_launch, last_kernel: "(none)", profile: None })
     }
 
@@ -304,20 +399,30 @@ impl Gpu {
     }
 
     fn emulate(total: Option<usize>) -> Self {
-        let emulator = Emulator { used: Arc::new(AtomicUsize::new(0)), total, launches: 0 };
+        let emulator = Emulator { used: Arc::new(AtomicUsize::new(0)), total, launches: 0, stream: Arc::default() };
         Self { engine: Engine::Emulated(emulator), sync_each_launch: false, last_kernel: "(none)", profile: None }
     }
 
-    /// The device's name and compute capability, for logs.
+    /// The device's name and compute capability, and how its kernels were compiled, for logs.
     pub fn describe(&self) -> String {
         let Engine::Cuda(d) = &self.engine else {
             return format!("emulated on the CPU ({} threads)", rayon::current_num_threads());
         };
         let name = d.ctx.name().unwrap_or_else(|_| "unknown device".into());
-        match d.ctx.compute_capability() {
-            Ok((major, minor)) => format!("{name} (sm_{major}{minor})"),
-            Err(_) => name,
-        }
+        let capability = d.ctx.compute_capability().ok();
+        let device = match capability {
+            Some((major, minor)) => format!("{name} (sm_{major}{minor})"),
+            None => name,
+        };
+        let code = match (&d.code, capability.and_then(|(major, minor)| cubin_for(major, minor))) {
+            (KernelCode::Fatbin, Some(arch)) => format!("kernels compiled ahead of time for sm_{arch}"),
+            (KernelCode::Fatbin, None) => "kernels JIT-compiled from the fatbin's PTX (no cubin for this GPU)".into(),
+            (KernelCode::Ptx { fatbin_refused: None }, _) => "kernels JIT-compiled from PTX (built without ptxas)".into(),
+            (KernelCode::Ptx { fatbin_refused: Some(error) }, _) => {
+                format!("kernels JIT-compiled from PTX (the driver refused the fatbin: {error})")
+            }
+        };
+        format!("{device}, {code}")
     }
 
     /// The device's peak floating-point rates, from its multiprocessors, clock and
@@ -363,7 +468,7 @@ impl Gpu {
                 if memory.total.is_some_and(|total| memory.used.load(Ordering::Relaxed) + bytes > total) {
                     return Err(out_of_memory(bytes));
                 }
-                Ok(Buffer::Host(HostMemory::zeroed(bytes, &memory.used)))
+                Ok(Buffer::Host(HostMemory::zeroed(bytes, memory)))
             }
         }
     }
@@ -379,6 +484,7 @@ impl Gpu {
                 d.stream.memcpy_htod(host, &mut target).map_err(|error| self.failed("cuMemcpyHtoD", error))
             }
             (_, device) => {
+                self.run_queued();
                 device.host_bytes_mut()[..host.len()].copy_from_slice(host);
                 Ok(())
             }
@@ -398,6 +504,7 @@ impl Gpu {
                 d.stream.synchronize().map_err(|error| self.failed("cuStreamSynchronize", error))
             }
             (_, device) => {
+                self.run_queued();
                 host.copy_from_slice(&device.host_bytes()[..host.len()]);
                 Ok(())
             }
@@ -409,6 +516,7 @@ impl Gpu {
     /// array after a swap, reads nonsense and fails the tests; a GPU's memory is left as it is.
     pub fn poison(&self, device: &mut Buffer) {
         if let (Engine::Emulated(_), device) = (&self.engine, device) {
+            self.run_queued();
             device.host_bytes_mut().fill(0xFF);
         }
     }
@@ -420,6 +528,7 @@ impl Gpu {
                 d.stream.memset_zeros(slice).map_err(|error| self.failed("cuMemsetD8", error))
             }
             (_, device) => {
+                self.run_queued();
                 device.host_bytes_mut().fill(0);
                 Ok(())
             }
@@ -433,6 +542,7 @@ impl Gpu {
                 d.stream.memcpy_dtod(s, t).map_err(|error| self.failed("cuMemcpyDtoD", error))
             }
             (_, source, target) => {
+                self.run_queued();
                 target.host_bytes_mut().copy_from_slice(source.host_bytes());
                 Ok(())
             }
@@ -443,7 +553,22 @@ impl Gpu {
     pub fn synchronize(&self) -> Result<(), CudaError> {
         match &self.engine {
             Engine::Cuda(d) => d.stream.synchronize().map_err(|error| self.failed("cuStreamSynchronize", error)),
-            Engine::Emulated(_) => Ok(()),
+            Engine::Emulated(_) => {
+                self.run_queued();
+                Ok(())
+            }
+        }
+    }
+
+    /// Runs the emulated device's queued launches, in order, then frees what buffers dropped
+    /// meanwhile held.
+    fn run_queued(&self) {
+        if let Engine::Emulated(emulator) = &self.engine {
+            let mut stream = lock(&emulator.stream);
+            for launch in std::mem::take(&mut stream.launches) {
+                launch.run();
+            }
+            stream.freed.clear();
         }
     }
 
@@ -455,7 +580,10 @@ impl Gpu {
                 .record_event(Some(sys::CUevent_flags::CU_EVENT_DEFAULT))
                 .map(Mark::Event)
                 .map_err(|error| CudaError::Driver { call: "cuEventRecord", error }),
-            Engine::Emulated(_) => Ok(Mark::Instant(Instant::now())),
+            Engine::Emulated(_) => {
+                self.run_queued();
+                Ok(Mark::Instant(Instant::now()))
+            }
         }
     }
 
@@ -550,19 +678,9 @@ impl Gpu {
             Engine::Emulated(emulator) => {
                 let entry: Emulated =
                     ENTRIES.iter().find(|(n, _)| *n == name).ok_or_else(|| CudaError::MissingKernel(name.into()))?.1;
-                let params: Vec<Param> = args.iter().map(|a| a.param()).collect();
                 emulator.launches += 1;
-                let seed = emulator.launches;
-                // A device runs blocks and the warps in them in no set order: each launch
-                // shuffles both, from its own seed, so that a kernel whose result depends on the
-                // order differs from the CPU and fails the tests.
-                let order = shuffled(blocks as usize, seed);
-                order.into_par_iter().for_each(|block| {
-                    for t in shuffled(BLOCK as usize, seed ^ (block as u64 + 1).wrapping_mul(GOLDEN_GAMMA)) {
-                        // SAFETY: as for the device: the caller vouches for the arguments and views.
-                        unsafe { entry(block * BLOCK as usize + t, &params) };
-                    }
-                });
+                let params = args.iter().map(|a| a.bytes().to_vec()).collect();
+                lock(&emulator.stream).launches.push(QueuedLaunch { entry, params, blocks, seed: emulator.launches });
             }
         }
         if let Some(start) = start {
@@ -588,7 +706,7 @@ impl Gpu {
 
 impl Buffer {
     /// The bytes of host memory, for one copy: no launch runs meanwhile, since the emulated
-    /// device's launches return when their threads are done.
+    /// device runs its queued launches, on the calling thread, before the copy.
     fn host_bytes(&self) -> &[u8] {
         match self {
             // SAFETY: `len` initialised words, owned by `self`.
@@ -609,8 +727,8 @@ impl Buffer {
 /// One kernel argument of [`Gpu::launch`].
 pub trait Arg {
     fn push<'a>(&'a self, builder: &mut cudarc::driver::LaunchArgs<'a>);
-    /// The argument as the emulated device passes it; it lives as long as `self`.
-    fn param(&self) -> Param;
+    /// The argument's bytes, as a driver copies them at a launch.
+    fn bytes(&self) -> &[u8];
 }
 
 impl<T: Copy> Arg for ByValue<T> {
@@ -618,8 +736,8 @@ impl<T: Copy> Arg for ByValue<T> {
         builder.arg(self);
     }
 
-    fn param(&self) -> Param {
-        // SAFETY: the launch that reads it returns before `self` can go.
-        unsafe { Param::new(&self.0) }
+    fn bytes(&self) -> &[u8] {
+        // SAFETY: `T` is plain data (the `DeviceRepr` impl above), read as its bytes.
+        unsafe { std::slice::from_raw_parts((&self.0 as *const T).cast(), std::mem::size_of::<T>()) }
     }
 }

@@ -91,10 +91,13 @@ unsafe impl Sync for Param {}
 
 #[cfg(not(target_arch = "nvptx64"))]
 impl Param {
+    /// The `size` bytes at `value`, as a driver receives a parameter: the entry checks the size
+    /// against its parameter's type.
+    ///
     /// # Safety
-    /// `value` must outlive every launch that reads the parameter.
-    pub unsafe fn new<T: Copy>(value: &T) -> Self {
-        Self { value: (value as *const T).cast(), size: core::mem::size_of::<T>() }
+    /// The bytes must outlive every launch that reads the parameter.
+    pub unsafe fn from_raw(value: *const u8, size: usize) -> Self {
+        Self { value, size }
     }
 
     /// The value as the entry's parameter type, whose size it must have.
