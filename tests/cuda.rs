@@ -23,7 +23,7 @@ use coil::simulation::Simulation;
 use coil_kernels::acceleration::AccelerationArgs;
 use coil_kernels::cell_grid::{HashArgs, Neighborhood};
 use coil_kernels::continuity_molteni2009::{ContinuityArgs, DensityIntegrationArgs};
-use coil_kernels::counting_sort::Counters;
+use coil_kernels::counting_sort::{Counters, Gathered, ReorderArgs};
 use coil_kernels::cross_viscosity::{Cross, Newtonian};
 use coil_kernels::density::DensityArgs;
 use coil_kernels::dfsph_bender2017::{
@@ -139,7 +139,7 @@ fn ptx_entry_parameters_match_the_host_argument_layouts() {
         add(format!("nozzle_{r}"), vec![count, size_of::<NozzleArgs<R>>()]);
         add(format!("nozzle_shift_{r}"), vec![count, size_of::<NozzleShiftArgs<R>>()]);
         add(format!("density_integration_{r}"), vec![count, size_of::<DensityIntegrationArgs<R>>()]);
-        add(format!("gather_{r}"), vec![count, size_of::<View<u32>>(), size_of::<View<R>>(), size_of::<ViewMut<R>>()]);
+        add(format!("reorder_{r}"), vec![count, size_of::<ReorderArgs<R>>()]);
         add(format!("append_{r}"), vec![count, 4, size_of::<View<R>>(), size_of::<ViewMut<R>>()]);
         add(format!("diagnostics_{r}"), vec![count, 4, size_of::<DiagnosticsArgs<R>>(), size_of::<ViewMut<StateFigures>>()]);
         add(format!("predictor_{r}"), vec![count, size_of::<PredictorArgs<R>>()]);
@@ -167,7 +167,6 @@ fn ptx_entry_parameters_match_the_host_argument_layouts() {
         ("near_fluid_periodic".into(), vec![4, size_of::<NearFluidArgs<Periodic>>()]),
         ("set_count".into(), vec![view, view, 4]),
         ("grow_count".into(), vec![view, 4]),
-        ("gather_u32".into(), vec![view; 4]),
         ("append_u32".into(), vec![view, 4, view, view]),
     ];
     per_precision::<f32>(&mut expected);
@@ -797,16 +796,14 @@ fn the_bench_profiles_every_launch_of_a_gpu_step() {
         let r = precision_name(m.precision);
         let launches = |k: &str| m.kernels.iter().find(|s| s.kernel == k).map_or(0.0, |s| s.launches_per_step);
         // The dam break is the paper's operator with the Cross model: one of each pass a step.
-        for k in ["hash", "count_particles", "scan_offsets", "scatter_particles", "sort_buckets", "gather_u32"] {
+        for k in ["hash", "count_particles", "scan_offsets", "scatter_particles", "sort_buckets"] {
             assert_eq!(launches(k), 1.0, "{r}: {k}");
         }
         for stem in ["density", "stress_cross", "acceleration_stress", "leapfrog"] {
             assert_eq!(launches(&format!("{stem}_{r}")), 1.0, "{r}: {stem}");
         }
-        // Positions are f64 in both precisions; the two velocities are reordered in R, per axis.
-        let (f64_gathers, real_gathers) = if r == "f32" { (3.0, 6.0) } else { (9.0, 9.0) };
-        assert_eq!(launches("gather_f64"), f64_gathers, "{r}: gather_f64");
-        assert_eq!(launches(&format!("gather_{r}")), real_gathers, "{r}: gather_{r}");
+        // One launch an axis reorders the position, both velocities and (with the first) the ids.
+        assert_eq!(launches(&format!("reorder_{r}")), 3.0, "{r}: reorder");
         // Every particle holds at least its position (24 bytes), id (4), velocity, half-step
         // velocity, acceleration, density and stress (16 numbers of R).
         let real = if r == "f32" { 4.0 } else { 8.0 };
@@ -851,15 +848,15 @@ fn the_emulated_device_runs_launches_when_the_host_waits() {
     let order = array(&(0..n as u32).rev().collect::<Vec<_>>());
     let unsorted = array(&(0..n as u32).map(|k| 7 * k).collect::<Vec<_>>());
     let sorted = array(&vec![0; n]);
-    // SAFETY: gather_u32(count, order, unsorted, sorted), each of its length.
-    unsafe {
-        gpu.launch(
-            "gather_u32",
-            n as u32,
-            &[&ByValue(count.view(1)), &ByValue(order.view(n)), &ByValue(unsorted.view(n)), &ByValue(sorted.view_mut(n))],
-        )
-        .expect("launch");
-    }
+    let args = ReorderArgs::<f32> {
+        order: order.view(n),
+        wide: Gathered::none(),
+        first: Gathered::none(),
+        second: Gathered::none(),
+        index: Gathered::new(unsorted.view(n), sorted.view_mut(n)),
+    };
+    // SAFETY: reorder_f32(count, args), each array of its length.
+    unsafe { gpu.launch("reorder_f32", n as u32, &[&ByValue(count.view(1)), &ByValue(args)]).expect("launch") };
     let unwaited = sorted.view(n);
     assert!((0..n).all(|k| unwaited.at(k) == 0), "the launch ran before the host waited");
     let gathered = to_host(&gpu, &sorted, n);
@@ -924,7 +921,8 @@ fn random_stages(engine: Engine, seed: u64) {
     let chunks = buckets.div_ceil(chunk_len);
     let totals = on_device(&gpu, &vec![0u32; coil_kernels::counting_sort::scan_levels_len(chunks)]);
     let sorted_order = on_device(&gpu, &vec![0u32; n]);
-    let sorted_x = on_device(&gpu, &vec![0f64; n]);
+    let sorted = [0, 1, 2].map(|_| on_device(&gpu, &vec![0f64; n]));
+    let sorted_key = on_device(&gpu, &vec![0u32; n]);
     let c = ByValue(count.view(1));
     let (keys, counts) = (ByValue(cell_key.view(n)), ByValue(counters.counters()));
     let (chunk_count, chunk) = (ByValue(chunks as u32), ByValue(chunk_len as u32));
@@ -956,10 +954,20 @@ fn random_stages(engine: Engine, seed: u64) {
         assert!(device_order[live..] == outside, "{engine:?}, seed {seed}: the particles outside");
         gpu.launch("set_count", 1, &[&ByValue(count.view_mut(1)), &starts, &ByValue(cells as u32)]).expect("count");
         assert_eq!(to_host(&gpu, &count, 1), [live as u32], "{engine:?}, seed {seed}: live count");
-        let (by, from, to) = (ByValue(sorted_order.view(n)), ByValue(x[0].view(n)), ByValue(sorted_x.view_mut(n)));
-        gpu.launch("gather_f64", n as u32, &[&c, &by, &from, &to]).expect("gather");
-        let gathered: Vec<f64> = order[..live].iter().map(|&i| position[0][i as usize]).collect();
-        assert!(to_host(&gpu, &sorted_x, live) == gathered, "{engine:?}, seed {seed}: reorder");
+        let reorder = ReorderArgs {
+            order: sorted_order.view(n),
+            wide: Gathered::new(x[0].view(n), sorted[0].view_mut(n)),
+            first: Gathered::new(x[1].view(n), sorted[1].view_mut(n)),
+            second: Gathered::new(x[2].view(n), sorted[2].view_mut(n)),
+            index: Gathered::new(cell_key.view(n), sorted_key.view_mut(n)),
+        };
+        gpu.launch("reorder_f64", n as u32, &[&c, &ByValue(reorder)]).expect("reorder");
+        for a in 0..3 {
+            let gathered: Vec<f64> = order[..live].iter().map(|&i| position[a][i as usize]).collect();
+            assert!(to_host(&gpu, &sorted[a], live) == gathered, "{engine:?}, seed {seed}: reorder of axis {a}");
+        }
+        let gathered: Vec<u32> = order[..live].iter().map(|&i| key[i as usize]).collect();
+        assert!(to_host(&gpu, &sorted_key, live) == gathered, "{engine:?}, seed {seed}: reorder of the keys");
     }
 
     // The cells holding and near fluid, with all but 6 particles as wall particles, so that
@@ -1608,7 +1616,7 @@ fn device_faults_give_clear_errors() {
     let log = std::fs::read_to_string(out.join("run.json")).expect("run log");
     assert!(log.contains("\"status\": \"failed\"") && log.contains("illegal memory access"), "{log}");
     let named =
-        run_on_fake(&root.join("named"), "cuda", &[("FAKE_CUDA_ILLEGAL_ADDRESS_AT_LAUNCH", "200"), ("COIL_CUDA_SYNC", "1")]);
+        run_on_fake(&root.join("named"), "cuda", &[("FAKE_CUDA_ILLEGAL_ADDRESS_AT_LAUNCH", "100"), ("COIL_CUDA_SYNC", "1")]);
     let stderr = String::from_utf8_lossy(&named.stderr);
     let faulted = stderr.lines().find_map(|l| l.strip_prefix("fake CUDA: kernel ")?.strip_suffix(" faulted"));
     let faulted = faulted.unwrap_or_else(|| panic!("the stand-in names the kernel it faulted: {stderr}"));

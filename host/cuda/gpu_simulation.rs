@@ -18,7 +18,7 @@ use crate::simulation::{Setup, Simulation, StepError};
 use coil_kernels::acceleration::AccelerationArgs;
 use coil_kernels::cell_grid::{HashArgs, Neighborhood};
 use coil_kernels::continuity_molteni2009::{ContinuityArgs, DensityIntegrationArgs};
-use coil_kernels::counting_sort::scan_levels_len;
+use coil_kernels::counting_sort::{scan_levels_len, Gathered, ReorderArgs};
 use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::density::{DensityArgs, DensityKernel};
 use coil_kernels::dfsph_bender2017::{
@@ -76,8 +76,10 @@ struct DeviceState<R> {
     stress: Option<[DeviceArray<R>; 6]>,
     viscosity: Option<DeviceArray<R>>,
     velocity_gradient: Option<[DeviceVec3<R>; 3]>,
+    /// Targets of the reorder, swapped with the arrays they receive: one launch gathers a
+    /// position axis, two arrays of `R` and the ids.
     scratch_f64: DeviceArray<f64>,
-    scratch_real: DeviceArray<R>,
+    scratch_real: [DeviceArray<R>; 2],
     scratch_u32: DeviceArray<u32>,
     cell_key: DeviceArray<u32>,
     counters: DeviceArray<u32>,
@@ -239,7 +241,10 @@ impl<R: Real> DeviceState<R> {
                 None
             },
             scratch_f64: DeviceArray::zeros(gpu, capacity, "sort scratch")?,
-            scratch_real: DeviceArray::zeros(gpu, capacity, "sort scratch")?,
+            scratch_real: [
+                DeviceArray::zeros(gpu, capacity, "sort scratch")?,
+                DeviceArray::zeros(gpu, capacity, "sort scratch")?,
+            ],
             scratch_u32: DeviceArray::zeros(gpu, capacity, "sort scratch")?,
             cell_key: DeviceArray::zeros(gpu, capacity, "cell keys")?,
             counters: DeviceArray::zeros(gpu, buckets, "cell counters")?,
@@ -280,7 +285,7 @@ impl<R: Real> DeviceState<R> {
             + self.viscosity.as_ref().map_or(0, DeviceArray::bytes)
             + self.velocity_gradient.as_ref().map_or(0, |g| g.iter().map(r3).sum())
             + self.scratch_f64.bytes()
-            + self.scratch_real.bytes()
+            + self.scratch_real.iter().map(DeviceArray::bytes).sum::<usize>()
             + self.scratch_u32.bytes()
             + self.cell_key.bytes()
             + self.counters.bytes()
@@ -661,58 +666,56 @@ impl<R: Real> CudaBackend<R> {
             gpu.launch("sort_buckets", cells, &[&ByValue(cells), &starts, &ByValue(d.order.view_mut(n))])?;
             gpu.launch("set_count", 1, &[&ByValue(d.count.view_mut(1)), &starts, &ByValue(cells)])?;
         }
-        let order = ByValue(d.order.view(n));
+        let order = d.order.view(n);
         let capacity = d.id.len();
-        // SAFETY: gather_<T>(count, order, unsorted, sorted) with `count` now the live count.
+        let reorder = kernel::<R>("reorder", "", "");
+        // SAFETY: reorder_<R>(count, args), every array gathered of the capacity's length into
+        // a scratch array of its type, `count` now the live count.
         unsafe {
             for a in 0..3 {
-                gpu.launch(
-                    "gather_f64",
-                    threads,
-                    &[&count, &order, &ByValue(d.position[a].view(capacity)), &ByValue(d.scratch_f64.view_mut(n))],
-                )?;
+                let [first, second] = &d.scratch_real;
+                let args = ReorderArgs {
+                    order,
+                    wide: Gathered::new(d.position[a].view(capacity), d.scratch_f64.view_mut(n)),
+                    first: Gathered::new(d.velocity[a].view(capacity), first.view_mut(n)),
+                    second: Gathered::new(d.velocity_half[a].view(capacity), second.view_mut(n)),
+                    index: if a == 0 { Gathered::new(d.id.view(capacity), d.scratch_u32.view_mut(n)) } else { Gathered::none() },
+                };
+                gpu.launch(reorder, threads, &[&count, &ByValue(args)])?;
                 std::mem::swap(&mut d.position[a], &mut d.scratch_f64);
                 d.scratch_f64.poison(gpu);
-                for field in [&mut d.velocity[a], &mut d.velocity_half[a]] {
-                    let sorted = ByValue(d.scratch_real.view_mut(n));
-                    gpu.launch(
-                        kernel::<R>("gather", "", ""),
-                        threads,
-                        &[&count, &order, &ByValue(field.view(capacity)), &sorted],
-                    )?;
-                    std::mem::swap(field, &mut d.scratch_real);
-                    d.scratch_real.poison(gpu);
+                for (field, scratch) in [&mut d.velocity[a], &mut d.velocity_half[a]].into_iter().zip(&mut d.scratch_real) {
+                    std::mem::swap(field, scratch);
+                    scratch.poison(gpu);
+                }
+                if a == 0 {
+                    std::mem::swap(&mut d.id, &mut d.scratch_u32);
+                    d.scratch_u32.poison(gpu);
                 }
             }
-            gpu.launch(
-                "gather_u32",
-                threads,
-                &[&count, &order, &ByValue(d.id.view(capacity)), &ByValue(d.scratch_u32.view_mut(n))],
-            )?;
-            std::mem::swap(&mut d.id, &mut d.scratch_u32);
-            d.scratch_u32.poison(gpu);
+            // The state only some runs carry, two arrays a launch.
+            let mut carried: Vec<&mut DeviceArray<R>> = Vec::new();
             if d.density_rate.is_some() {
-                let sorted = ByValue(d.scratch_real.view_mut(n));
-                gpu.launch(
-                    kernel::<R>("gather", "", ""),
-                    threads,
-                    &[&count, &order, &ByValue(d.density.view(capacity)), &sorted],
-                )?;
-                std::mem::swap(&mut d.density, &mut d.scratch_real);
-                d.scratch_real.poison(gpu);
+                carried.push(&mut d.density);
             }
-            let pressure_sums = d.pressure_solve.as_mut().map(|p| &mut p.stiffness_sums[..]).unwrap_or_default();
-            let viscous_change = d.implicit.as_mut().map(|i| &mut i.viscous_change[..]).unwrap_or_default();
-            {
-                for field in viscous_change.iter_mut().chain(pressure_sums) {
-                    let sorted = ByValue(d.scratch_real.view_mut(n));
-                    gpu.launch(
-                        kernel::<R>("gather", "", ""),
-                        threads,
-                        &[&count, &order, &ByValue(field.view(capacity)), &sorted],
-                    )?;
-                    std::mem::swap(field, &mut d.scratch_real);
-                    d.scratch_real.poison(gpu);
+            carried.extend(d.implicit.as_mut().map(|i| &mut i.viscous_change[..]).unwrap_or_default());
+            carried.extend(d.pressure_solve.as_mut().map(|p| &mut p.stiffness_sums[..]).unwrap_or_default());
+            for pair in carried.chunks_mut(2) {
+                let [first, second] = &d.scratch_real;
+                let gathered = |k: usize, scratch: &DeviceArray<R>| {
+                    pair.get(k).map_or(Gathered::none(), |field| Gathered::new(field.view(capacity), scratch.view_mut(n)))
+                };
+                let args = ReorderArgs {
+                    order,
+                    wide: Gathered::none(),
+                    first: gathered(0, first),
+                    second: gathered(1, second),
+                    index: Gathered::none(),
+                };
+                gpu.launch(reorder, threads, &[&count, &ByValue(args)])?;
+                for (field, scratch) in pair.iter_mut().zip(&mut d.scratch_real) {
+                    std::mem::swap(*field, scratch);
+                    scratch.poison(gpu);
                 }
             }
         }

@@ -11,7 +11,7 @@
 use crate::acceleration::AccelerationArgs;
 use crate::cell_grid::{CellGrid, HashArgs, Neighborhood};
 use crate::continuity_molteni2009::{ContinuityArgs, DensityIntegrationArgs};
-use crate::counting_sort::Counters;
+use crate::counting_sort::{Counters, Gathered, ReorderArgs};
 use crate::cross_viscosity::{Cross, Newtonian};
 use crate::density::DensityArgs;
 use crate::dfsph_bender2017::{
@@ -89,6 +89,10 @@ layouts!(R;
     Mat3View<'static, R> { rows }
     Mat3ViewMut<'static, R> { rows }
     Counters<'static> { ptr, len }
+    Gathered<'static, R> { unsorted, sorted }
+    Gathered<'static, f64> { unsorted, sorted }
+    Gathered<'static, u32> { unsorted, sorted }
+    ReorderArgs<'static, R> { order, wide, first, second, index }
     O { grid, cell_start, position, topology, near_fluid }
     P { grid, cell_start, position, topology, near_fluid }
     Vec3<R> { x, y, z }

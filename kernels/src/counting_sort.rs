@@ -216,3 +216,66 @@ pub fn gather<T: Copy>(k: usize, order: View<u32>, unsorted: View<T>, sorted: Vi
     // SAFETY: each k is written by one invocation.
     unsafe { sorted.write(k, unsorted.at(order.at(k) as usize)) };
 }
+
+/// One array of a [`ReorderArgs`] launch: `unsorted` gathered into `sorted`, or nothing where
+/// `sorted` is empty.
+#[repr(C)]
+#[derive(Debug)]
+pub struct Gathered<'a, T> {
+    pub unsorted: View<'a, T>,
+    pub sorted: ViewMut<'a, T>,
+}
+impl<T> Clone for Gathered<'_, T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<T> Copy for Gathered<'_, T> {}
+
+impl<'a, T: Copy> Gathered<'a, T> {
+    pub fn new(unsorted: View<'a, T>, sorted: ViewMut<'a, T>) -> Self {
+        Self { unsorted, sorted }
+    }
+
+    /// No array: the launch skips it.
+    pub fn none() -> Self {
+        Self { unsorted: View::new(&[]), sorted: ViewMut::new(&mut []) }
+    }
+
+    #[inline(always)]
+    fn gather(&self, k: usize, from: usize) {
+        if !self.sorted.is_empty() {
+            // SAFETY: each k is written by one invocation.
+            unsafe { self.sorted.write(k, self.unsorted.at(from)) };
+        }
+    }
+}
+
+/// The arrays one launch of the device's reorder gathers by `order`: a position axis (f64), two
+/// arrays of `R` and the ids. One launch an array would leave a small run's step bound by
+/// launches rather than bytes.
+#[repr(C)]
+#[derive(Debug)]
+pub struct ReorderArgs<'a, R> {
+    pub order: View<'a, u32>,
+    pub wide: Gathered<'a, f64>,
+    pub first: Gathered<'a, R>,
+    pub second: Gathered<'a, R>,
+    pub index: Gathered<'a, u32>,
+}
+impl<R> Clone for ReorderArgs<'_, R> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<R> Copy for ReorderArgs<'_, R> {}
+
+/// [`gather`] of entry `k` of every array of `args`.
+#[inline(always)]
+pub fn reorder_pass<R: Copy>(k: usize, args: &ReorderArgs<R>) {
+    let from = args.order.at(k) as usize;
+    args.wide.gather(k, from);
+    args.first.gather(k, from);
+    args.second.gather(k, from);
+    args.index.gather(k, from);
+}

@@ -15,8 +15,8 @@ use crate::acceleration::{acceleration_pass, AccelerationArgs};
 use crate::cell_grid::{hash_pass, HashArgs, Neighborhood};
 use crate::continuity_molteni2009::{continuity_pass, density_integration_pass, ContinuityArgs, DensityIntegrationArgs};
 use crate::counting_sort::{
-    chunk_total, count_particle, gather, scan_chunk, scan_chunk_in_place, scan_chunk_offsets, scatter, sort_bucket, sum_chunk,
-    Counters,
+    chunk_total, count_particle, reorder_pass, scan_chunk, scan_chunk_in_place, scan_chunk_offsets, scatter, sort_bucket,
+    sum_chunk, Counters, ReorderArgs,
 };
 use crate::cross_viscosity::{Cross, Newtonian};
 use crate::density::{density_pass, DensityArgs, Poly6, Spiky};
@@ -608,19 +608,8 @@ entry!(near_fluid_periodic(c; cells: u32, args: NearFluidArgs<'static, Periodic>
     }
 });
 
-macro_rules! gather_kernel {
-    ($name:ident, $t:ty) => {
-        entry!($name(k; count: View<'static, u32>, order: View<'static, u32>, unsorted: View<'static, $t>, sorted: ViewMut<'static, $t>) {
-            if k < count.at(0) as usize {
-                gather(k, order, unsorted, sorted);
-            }
-        });
-    };
-}
-
-gather_kernel!(gather_u32, u32);
-gather_kernel!(gather_f32, f32);
-gather_kernel!(gather_f64, f64);
+per_index_kernel!(reorder_f32, ReorderArgs<'static, f32>, reorder_pass);
+per_index_kernel!(reorder_f64, ReorderArgs<'static, f64>, reorder_pass);
 
 // After the sort: the live count is the start of the bucket of particles outside the domain.
 entry!(set_count(t; count: ViewMut<'static, u32>, bucket_start: View<'static, u32>, cells: u32) {
@@ -857,9 +846,8 @@ pub const ENTRIES: &[(&str, Emulated)] = {
         holds_fluid,
         near_fluid,
         near_fluid_periodic,
-        gather_u32,
-        gather_f32,
-        gather_f64,
+        reorder_f32,
+        reorder_f64,
         set_count,
         grow_count,
         append_u32,
