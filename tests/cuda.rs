@@ -1508,6 +1508,7 @@ fn kernel_code_line() -> &'static str {
 /// PTX declares), `--backend cuda` writes the CPU's frames byte for byte and says it loaded the
 /// fatbin's sm_90 cubin. Where the driver refuses the fatbin, as one older than the ptxas that
 /// compiled it does, the run JIT-compiles the PTX instead, says why, and writes the same frames.
+/// `coil bench` times the kernels there with the driver's events.
 #[test]
 fn the_driver_path_writes_the_cpus_frames() {
     let root = std::env::temp_dir().join(format!("coil-fake-driver-{}", std::process::id()));
@@ -1531,6 +1532,16 @@ fn the_driver_path_writes_the_cpus_frames() {
         );
         assert!(files(&root.join("refused")) == frames, "the frames from the PTX differ from the CPU's");
     }
+    // `coil bench` times each kernel with the driver's events and probes its copy bandwidth.
+    let bench = std::process::Command::new(coil_binary())
+        .args(["bench", "--backend", "cuda", "--sizes", "1K", "--precision", "f32", "--steps", "3", "--out"])
+        .arg(root.join("bench"))
+        .env("LD_LIBRARY_PATH", fake_driver())
+        .output()
+        .expect("coil runs");
+    assert!(bench.status.success(), "{}", String::from_utf8_lossy(&bench.stderr));
+    let report = std::fs::read_to_string(root.join("bench/bench.md")).expect("the bench report");
+    assert!(report.contains("## GPU kernels at 1K (f32), CUDA events") && report.contains("| reorder_f32 | 3.0 |"), "{report}");
     std::fs::remove_dir_all(&root).ok();
 }
 
