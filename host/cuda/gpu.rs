@@ -17,6 +17,7 @@ use cudarc::nvrtc::Ptx;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::fmt;
+use std::mem::MaybeUninit;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Instant;
@@ -254,7 +255,7 @@ struct Stream {
 /// them, so the host may reuse its own.
 struct QueuedLaunch {
     entry: Emulated,
-    params: Vec<Vec<u8>>,
+    params: Vec<Vec<MaybeUninit<u8>>>,
     blocks: u32,
     /// Seeds the order of its blocks and threads.
     seed: u64,
@@ -266,7 +267,7 @@ impl QueuedLaunch {
             .params
             .iter()
             // SAFETY: the bytes outlive the launch, which returns before they go.
-            .map(|p| unsafe { Param::from_raw(p.as_ptr(), p.len()) })
+            .map(|p| unsafe { Param::from_raw(p.as_ptr().cast(), p.len()) })
             .collect();
         let (entry, seed) = (self.entry, self.seed);
         // A device runs blocks and the warps in them in no set order: each launch shuffles
@@ -679,7 +680,7 @@ impl Gpu {
                 let entry: Emulated =
                     ENTRIES.iter().find(|(n, _)| *n == name).ok_or_else(|| CudaError::MissingKernel(name.into()))?.1;
                 emulator.launches += 1;
-                let params = args.iter().map(|a| a.bytes().to_vec()).collect();
+                let params = args.iter().map(|a| a.bytes()).collect();
                 lock(&emulator.stream).launches.push(QueuedLaunch { entry, params, blocks, seed: emulator.launches });
             }
         }
@@ -727,8 +728,9 @@ impl Buffer {
 /// One kernel argument of [`Gpu::launch`].
 pub trait Arg {
     fn push<'a>(&'a self, builder: &mut cudarc::driver::LaunchArgs<'a>);
-    /// The argument's bytes, as a driver copies them at a launch.
-    fn bytes(&self) -> &[u8];
+    /// A copy of the argument's bytes, as a driver takes one at a launch (padding included,
+    /// hence maybe uninitialised).
+    fn bytes(&self) -> Vec<MaybeUninit<u8>>;
 }
 
 impl<T: Copy> Arg for ByValue<T> {
@@ -736,8 +738,8 @@ impl<T: Copy> Arg for ByValue<T> {
         builder.arg(self);
     }
 
-    fn bytes(&self) -> &[u8] {
-        // SAFETY: `T` is plain data (the `DeviceRepr` impl above), read as its bytes.
-        unsafe { std::slice::from_raw_parts((&self.0 as *const T).cast(), std::mem::size_of::<T>()) }
+    fn bytes(&self) -> Vec<MaybeUninit<u8>> {
+        // SAFETY: any value's bytes may be read as `MaybeUninit<u8>`.
+        unsafe { std::slice::from_raw_parts((&self.0 as *const T).cast(), std::mem::size_of::<T>()) }.to_vec()
     }
 }

@@ -27,6 +27,7 @@ use coil_kernels::ptx::{Emulated, Param, ENTRIES};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::ffi::{c_char, c_int, c_uint, c_void, CStr};
+use std::mem::MaybeUninit;
 use std::panic::AssertUnwindSafe;
 use std::sync::{Mutex, MutexGuard};
 use std::time::Instant;
@@ -88,7 +89,8 @@ enum Op {
     Launch {
         kernel: &'static Kernel,
         threads: usize,
-        params: Vec<Vec<u8>>,
+        /// Copied at the launch, padding and all (hence maybe uninitialised).
+        params: Vec<Vec<MaybeUninit<u8>>>,
         faults: bool,
     },
     /// The host's bytes, taken when the copy was queued, as a driver stages a pageable copy.
@@ -202,7 +204,7 @@ impl Driver {
                 let params: Vec<Param> = params
                     .iter()
                     // SAFETY: the bytes outlive the launch, which returns before they go.
-                    .map(|p| unsafe { Param::from_raw(p.as_ptr(), p.len()) })
+                    .map(|p| unsafe { Param::from_raw(p.as_ptr().cast(), p.len()) })
                     .collect();
                 let entry = kernel.entry;
                 // A kernel reading past an array panics on the host (the views check their
@@ -633,7 +635,7 @@ pub unsafe extern "C" fn cuLaunchKernel(
         return INVALID_VALUE;
     }
     let params = (0..kernel.param_sizes.len())
-        .map(|k| std::slice::from_raw_parts((*params.add(k)).cast::<u8>(), kernel.param_sizes[k]).to_vec())
+        .map(|k| std::slice::from_raw_parts((*params.add(k)).cast::<MaybeUninit<u8>>(), kernel.param_sizes[k]).to_vec())
         .collect();
     let threads = grid_x as usize * block_x as usize;
     with_driver(|d| {
