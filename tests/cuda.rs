@@ -1414,23 +1414,6 @@ fn stand_in_driver(name: &str, source: &str) -> Option<std::path::PathBuf> {
     Some(dir)
 }
 
-/// `coil run` of a short dam break on `backend`, the stand-in driver in `dir` found first
-/// (LD_LIBRARY_PATH), with `env` set.
-fn run_on_stand_in(dir: &Path, backend: &str, env: &[(&str, &str)]) -> std::process::Output {
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
-    std::process::Command::new(coil_binary())
-        .arg("run")
-        .arg(&scene)
-        .args(["--backend", backend, "--overwrite", "--set", "simulation.end_time_s=0.001", "--set"])
-        .arg("material.particle_spacing_m=0.04")
-        .arg("--out")
-        .arg(dir.join(format!("out-{backend}")))
-        .env("LD_LIBRARY_PATH", dir)
-        .envs(env.iter().copied())
-        .output()
-        .expect("coil runs")
-}
-
 /// A driver library that lacks most functions (a stand-in built here with `cc`) gives
 /// `--backend cuda` a clear error naming the first missing function, and `--backend auto` the
 /// CPU with that reason: never a panic.
@@ -1442,12 +1425,12 @@ fn an_old_driver_is_an_error_not_a_panic() {
     ) else {
         return;
     };
-    let cuda = run_on_stand_in(&dir, "cuda", &[]);
+    let cuda = run_on_driver(&dir, &dir.join("out-cuda"), "cuda", &[]);
     let stderr = String::from_utf8_lossy(&cuda.stderr);
     assert_eq!(cuda.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("the CUDA driver lacks cu") && stderr.contains("--backend cpu"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
-    let auto = run_on_stand_in(&dir, "auto", &[]);
+    let auto = run_on_driver(&dir, &dir.join("out-auto"), "auto", &[]);
     let stderr = String::from_utf8_lossy(&auto.stderr);
     assert!(auto.status.success(), "{stderr}");
     assert!(stderr.contains("backend: cpu (the CUDA driver lacks cu"), "{stderr}");
@@ -1479,8 +1462,8 @@ fn fake_driver() -> &'static Path {
 }
 
 /// `coil run` of the dam break at 0.04 m spacing to 4 ms, a frame every 2 ms, on `backend`,
-/// into `out`, the fake driver found first, with `env` set.
-fn run_on_fake(out: &Path, backend: &str, env: &[(&str, &str)]) -> std::process::Output {
+/// into `out`, the driver library in `driver` found first, with `env` set.
+fn run_on_driver(driver: &Path, out: &Path, backend: &str, env: &[(&str, &str)]) -> std::process::Output {
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dam_break.toml");
     std::process::Command::new(coil_binary())
         .arg("run")
@@ -1488,10 +1471,15 @@ fn run_on_fake(out: &Path, backend: &str, env: &[(&str, &str)]) -> std::process:
         .args(["--backend", backend, "--overwrite", "--set", "simulation.end_time_s=0.004"])
         .args(["--set", "output.every_s=0.002", "--set", "material.particle_spacing_m=0.04", "--out"])
         .arg(out)
-        .env("LD_LIBRARY_PATH", fake_driver())
+        .env("LD_LIBRARY_PATH", driver)
         .envs(env.iter().copied())
         .output()
         .expect("coil runs")
+}
+
+/// [`run_on_driver`] on the fake driver.
+fn run_on_fake(out: &Path, backend: &str, env: &[(&str, &str)]) -> std::process::Output {
+    run_on_driver(fake_driver(), out, backend, env)
 }
 
 /// What coil says of how the kernels reached the device, as the build made them.
