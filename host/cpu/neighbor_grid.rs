@@ -3,6 +3,7 @@
 //! particles that left the domain box.
 
 use crate::cpu::parallel::launch;
+use crate::simulation::particle_array::ParticleArray;
 use crate::simulation::particles::{view_mut, Particles};
 use coil_kernels::cell_grid::{hash_pass, CellGrid, HashArgs, Neighborhood};
 use coil_kernels::counting_sort::{
@@ -259,7 +260,12 @@ impl NeighborGrid {
 /// ids, and density where the continuity equation integrates it) into sorted order; fields
 /// recomputed each step are left alone.
 fn reorder<R: Real>(p: &mut Particles<R>, order: View<u32>, live: usize) {
-    fn permute<T: Copy + Send + Sync>(field: &mut Vec<T>, scratch: &mut Vec<T>, order: View<u32>, live: usize) {
+    fn permute<T: Copy + Send + Sync>(
+        field: &mut ParticleArray<T>,
+        scratch: &mut ParticleArray<T>,
+        order: View<u32>,
+        live: usize,
+    ) {
         let unsorted = View::new(&field[..]);
         let sorted = view_mut(scratch, live);
         launch(live, |k| gather(k, order, unsorted, sorted));

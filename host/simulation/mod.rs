@@ -6,6 +6,7 @@ pub mod divergence_free;
 pub mod implicit_viscosity;
 pub mod inlet;
 pub mod model;
+pub mod particle_array;
 pub mod particles;
 pub mod run_state;
 pub mod time_step;

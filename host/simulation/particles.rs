@@ -1,8 +1,11 @@
 //! Structure-of-arrays particle storage, allocated once to the run's capacity.
 
+use std::ops::{Deref, DerefMut};
+
 use crate::scene::Pressure;
 use crate::scene::{DensityEquation, Scene};
 use crate::simulation::backend::{ImplicitViews, PressureViews};
+use crate::simulation::particle_array::ParticleArray;
 use coil_kernels::dfsph_bender2017::ERROR_RANGE;
 use coil_kernels::fluid::Fluid;
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
@@ -47,20 +50,20 @@ impl ModelFields {
 pub struct ImplicitArrays<R> {
     /// The last step's viscous change of velocity v - v* (m/s): the next solve's warm start,
     /// state that the sort reorders and checkpoints keep.
-    pub viscous_change: [Vec<R>; 3],
+    pub viscous_change: [ParticleArray<R>; 3],
     /// v* (m/s).
-    pub predicted: [Vec<R>; 3],
+    pub predicted: [ParticleArray<R>; 3],
     /// The solve's iterate, the new half-step velocity (m/s).
-    pub solution: [Vec<R>; 3],
-    pub residual: [Vec<R>; 3],
-    pub preconditioned: [Vec<R>; 3],
-    pub direction: [Vec<R>; 3],
+    pub solution: [ParticleArray<R>; 3],
+    pub residual: [ParticleArray<R>; 3],
+    pub preconditioned: [ParticleArray<R>; 3],
+    pub direction: [ParticleArray<R>; 3],
     /// (I - dt A) times the search direction.
-    pub product: [Vec<R>; 3],
+    pub product: [ParticleArray<R>; 3],
     /// Diagonal blocks of I - dt A: xx, yy, zz, xy, xz, yz.
-    pub block: [Vec<R>; 6],
+    pub block: [ParticleArray<R>; 6],
     /// One pair of partial dot products per range of `DOT_RANGE` particles.
-    pub partial_dots: Vec<[f64; 2]>,
+    pub partial_dots: ParticleArray<[f64; 2]>,
 }
 
 impl<R: Real> ImplicitArrays<R> {
@@ -102,17 +105,17 @@ impl<R: Real> ImplicitArrays<R> {
 /// The divergence-free pressure solves' per-particle arrays (`coil_kernels::dfsph_bender2017`).
 pub struct PressureArrays<R> {
     /// alpha_i (m^5/kg).
-    pub factor: Vec<R>,
+    pub factor: ParticleArray<R>,
     /// This sweep's stiffness p / rho^2 (m^5/(kg s^2)).
-    pub stiffness: Vec<R>,
+    pub stiffness: ParticleArray<R>,
     /// This sweep's density error (kg/m^3).
-    pub error: Vec<R>,
+    pub error: ParticleArray<R>,
     /// The last step's stiffness sums of the divergence and the density solve, each solve's
     /// warm start: state that the sort reorders and checkpoints keep. rho^2 times the density
     /// solve's is the pressure the frames show.
-    pub stiffness_sums: [Vec<R>; 2],
+    pub stiffness_sums: [ParticleArray<R>; 2],
     /// One pair (error sum, fluid count) per range of `ERROR_RANGE` particles.
-    pub partial_sums: Vec<[f64; 2]>,
+    pub partial_sums: ParticleArray<[f64; 2]>,
 }
 
 impl<R: Real> PressureArrays<R> {
@@ -151,31 +154,31 @@ pub struct Particles<R> {
     len: usize,
     capacity: usize,
     /// Position (m), f64 in both precisions (see `leapfrog`).
-    pub position: [Vec<f64>; 3],
+    pub position: [ParticleArray<f64>; 3],
     /// Velocity at the full step (m/s).
-    pub velocity: [Vec<R>; 3],
+    pub velocity: [ParticleArray<R>; 3],
     /// Velocity at the half step (m/s).
-    pub velocity_half: [Vec<R>; 3],
+    pub velocity_half: [ParticleArray<R>; 3],
     /// Stable particle identity, kept through sorting.
-    pub id: Vec<u32>,
+    pub id: ParticleArray<u32>,
     /// Density (kg/m^3).
-    pub density: Vec<R>,
+    pub density: ParticleArray<R>,
     /// Acceleration (m/s^2).
-    pub acceleration: [Vec<R>; 3],
+    pub acceleration: [ParticleArray<R>; 3],
     /// Shear stress tau (Pa): xx, yy, zz, xy, xz, yz. Allocated only for the paper's operator.
-    pub stress: Option<[Vec<R>; 6]>,
+    pub stress: Option<[ParticleArray<R>; 6]>,
     /// Kinematic viscosity nu(D) (m^2/s). Allocated only for Morris's operator with a Cross
     /// fluid and for the paper's operator with hourglass control.
-    pub viscosity: Option<Vec<R>>,
+    pub viscosity: Option<ParticleArray<R>>,
     /// Velocity gradient grad v (1/s) by rows, `[a][b]` = d v_a / d x_b. Allocated only for the
     /// paper's operator with hourglass control.
-    pub velocity_gradient: Option<[[Vec<R>; 3]; 3]>,
+    pub velocity_gradient: Option<[[ParticleArray<R>; 3]; 3]>,
     /// d rho / dt (kg/(m^3 s)). Allocated only where density comes from the continuity
     /// equation.
-    pub density_rate: Option<Vec<R>>,
+    pub density_rate: Option<ParticleArray<R>>,
     /// This step's shift (m), computed over the step's positions and applied after leap-frog.
     /// Allocated only where the scene shifts particles.
-    pub shift: Option<[Vec<R>; 3]>,
+    pub shift: Option<[ParticleArray<R>; 3]>,
     /// The implicit viscosity solve's arrays, scratch within a step. Allocated only where
     /// viscosity is solved implicitly.
     pub implicit: Option<ImplicitArrays<R>>,
@@ -183,13 +186,13 @@ pub struct Particles<R> {
     /// solved for a divergence-free flow.
     pub pressure_solve: Option<PressureArrays<R>>,
     /// Targets of the reorder, swapped with the field they receive.
-    pub(crate) scratch_f64: Vec<f64>,
-    pub(crate) scratch_real: Vec<R>,
-    pub(crate) scratch_u32: Vec<u32>,
+    pub(crate) scratch_f64: ParticleArray<f64>,
+    pub(crate) scratch_real: ParticleArray<R>,
+    pub(crate) scratch_u32: ParticleArray<u32>,
 }
 
-fn zeros<T: Clone + Default>(n: usize) -> Vec<T> {
-    vec![T::default(); n]
+fn zeros<T: Clone + Default>(n: usize) -> ParticleArray<T> {
+    ParticleArray::zeros(n)
 }
 
 impl<R: Real> Particles<R> {
@@ -338,11 +341,11 @@ impl<R: Real> Particles<R> {
     }
 }
 
-pub fn vec3_view<T: Copy>(a: &[Vec<T>; 3], len: usize) -> Vec3View<'_, T> {
+pub fn vec3_view<T: Copy, A: Deref<Target = [T]>>(a: &[A; 3], len: usize) -> Vec3View<'_, T> {
     Vec3View::new(&a[0][..len], &a[1][..len], &a[2][..len])
 }
 
-pub fn vec3_view_mut<T: Copy>(a: &mut [Vec<T>; 3], len: usize) -> Vec3ViewMut<'_, T> {
+pub fn vec3_view_mut<T: Copy, A: DerefMut<Target = [T]>>(a: &mut [A; 3], len: usize) -> Vec3ViewMut<'_, T> {
     let [x, y, z] = a;
     Vec3ViewMut::new(&mut x[..len], &mut y[..len], &mut z[..len])
 }
@@ -351,7 +354,7 @@ pub fn view_mut<T: Copy>(a: &mut [T], len: usize) -> ViewMut<'_, T> {
     ViewMut::new(&mut a[..len])
 }
 
-pub fn stress_view_mut<R: Copy>(s: &mut [Vec<R>; 6], n: usize) -> SymTensorViewMut<'_, R> {
+pub fn stress_view_mut<R: Copy>(s: &mut [ParticleArray<R>; 6], n: usize) -> SymTensorViewMut<'_, R> {
     let [xx, yy, zz, xy, xz, yz] = s;
     SymTensorViewMut {
         xx: view_mut(xx, n),
@@ -363,7 +366,7 @@ pub fn stress_view_mut<R: Copy>(s: &mut [Vec<R>; 6], n: usize) -> SymTensorViewM
     }
 }
 
-pub fn mat3_view_mut<R: Copy>(m: &mut [[Vec<R>; 3]; 3], n: usize) -> Mat3ViewMut<'_, R> {
+pub fn mat3_view_mut<R: Copy>(m: &mut [[ParticleArray<R>; 3]; 3], n: usize) -> Mat3ViewMut<'_, R> {
     let [x, y, z] = m;
     Mat3ViewMut { rows: [vec3_view_mut(x, n), vec3_view_mut(y, n), vec3_view_mut(z, n)] }
 }
