@@ -495,7 +495,7 @@ fn the_mirrored_wall_fit_reproduces_linear_fields_next_to_a_wall() {
         let pressure = if p.id[i] < boundary_count { 1e6 } else { pressure_at(x) };
         p.density[i] = fluid.rest_density + pressure / fluid.sound_speed2;
     }
-    let (id, nb) = (p.id.clone(), grid.neighborhood(coil::simulation::particles::vec3_view(&p.position, n), Open));
+    let (id, nb) = (p.id.to_vec(), grid.neighborhood(coil::simulation::particles::vec3_view(&p.position, n), Open));
     let velocity = coil::simulation::particles::vec3_view_mut(&mut p.velocity, n);
     let density = ViewMut::new(&mut p.density);
     for x in [[0.05, 0.005, 0.05], [0.043, 0.015, 0.061], [0.05, 0.045, 0.05], [0.031, 0.0001, 0.052]] {
@@ -531,7 +531,7 @@ fn fluid_samples(p: &mut coil::simulation::particles::Particles<f64>, fluid: &Fl
     let mut grid = NeighborGrid::new([-0.05; 3], [0.15; 3], fluid.kernels.h, [false; 3], p.capacity());
     grid.sort(p);
     let n = p.len();
-    let (id, nb) = (p.id.clone(), grid.neighborhood(coil::simulation::particles::vec3_view(&p.position, n), Open));
+    let (id, nb) = (p.id.to_vec(), grid.neighborhood(coil::simulation::particles::vec3_view(&p.position, n), Open));
     let velocity = coil::simulation::particles::vec3_view_mut(&mut p.velocity, n);
     let density = ViewMut::new(&mut p.density);
     points.iter().map(|&x| fluid_at(x, &nb, &View::new(&id), &velocity, &density, fluid).velocity).collect()
