@@ -7,6 +7,7 @@ pub mod parallel;
 use crate::cpu::neighbor_grid::NeighborGrid;
 use crate::cpu::parallel::{launch, on_worker};
 use crate::simulation::backend::{Backend, ParticleViews, Passes, Readout, Schedule};
+use crate::simulation::particle_array::ParticleArray;
 use crate::simulation::particles::{
     mat3_view_mut, stress_view_mut, vec3_view, vec3_view_mut, view_mut, HostParticles, Particles,
 };
@@ -68,7 +69,7 @@ pub struct CpuBackend<R> {
     /// The kernels of the pair passes: the lists hold the pairs within their support.
     kernels: SmoothingKernels<R>,
     /// `NEIGHBOR_SLOTS` per particle of capacity under `ListsAndGradients`, else empty.
-    spiky_gradient: Vec<[R; 3]>,
+    spiky_gradient: ParticleArray<[R; 3]>,
     /// Each wall particle's mirror image (m), x, y, z by id, under mirrored walls.
     wall_mirror: Option<[Vec<f64>; 3]>,
 }
@@ -86,8 +87,8 @@ impl<R: Real> CpuBackend<R> {
             host.grid.keep_neighbor_lists();
         }
         let spiky_gradient = match visits {
-            NeighborVisits::ListsAndGradients => vec![[R::ZERO; 3]; host.particles.capacity() * NEIGHBOR_SLOTS],
-            _ => Vec::new(),
+            NeighborVisits::ListsAndGradients => ParticleArray::zeros(host.particles.capacity() * NEIGHBOR_SLOTS),
+            _ => ParticleArray::default(),
         };
         Self { host, kernels, spiky_gradient, wall_mirror }
     }

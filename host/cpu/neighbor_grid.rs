@@ -25,10 +25,10 @@ pub struct NeighborGrid {
     pub grid: CellGrid,
     /// The domain's periods (0 along open axes; all 0 for an open domain).
     pub periodic: Periodic,
-    cell_key: Vec<u32>,
+    cell_key: ParticleArray<u32>,
     counters: Vec<AtomicU32>,
     cell_start: Vec<u32>,
-    order: Vec<u32>,
+    order: ParticleArray<u32>,
     /// The chunk totals, then the levels of their scan (`counting_sort::scan_levels`).
     chunk_offsets: Vec<u32>,
     /// Per cell: whether it holds fluid (allocated by `track_fluid`), then whether it lies near
@@ -39,7 +39,7 @@ pub struct NeighborGrid {
     /// marks every cell near fluid.
     resting_boundary: Option<u32>,
     /// `NEIGHBOR_SLOTS` per particle of capacity once `keep_neighbor_lists` allocates them.
-    neighbor_list: Vec<u32>,
+    neighbor_list: ParticleArray<u32>,
 }
 
 /// How far below the support radius (relative) a periodic axis's cells may fall: a period
@@ -64,15 +64,15 @@ impl NeighborGrid {
         Self {
             grid,
             periodic,
-            cell_key: vec![0; capacity],
+            cell_key: ParticleArray::zeros(capacity),
             counters: (0..buckets).map(|_| AtomicU32::new(0)).collect(),
             cell_start: vec![0; buckets + 1],
-            order: vec![0; capacity],
+            order: ParticleArray::zeros(capacity),
             chunk_offsets: vec![0; scan_levels_len(buckets.div_ceil(SCAN_CHUNK))],
             holds_fluid: Vec::new(),
             near_fluid: vec![1; buckets - 1],
             resting_boundary: None,
-            neighbor_list: Vec::new(),
+            neighbor_list: ParticleArray::default(),
         }
     }
 
@@ -92,7 +92,7 @@ impl NeighborGrid {
     /// Allocates the neighbor lists (`coil_kernels::neighbor_list`) for every particle of
     /// capacity, so that `record_neighbors` can fill them: on the CPU backend only.
     pub fn keep_neighbor_lists(&mut self) {
-        self.neighbor_list = vec![0; self.order.len() * NEIGHBOR_SLOTS];
+        self.neighbor_list = ParticleArray::zeros(self.order.len() * NEIGHBOR_SLOTS);
     }
 
     /// Whether the grid keeps neighbor lists.

@@ -42,6 +42,13 @@ fn start_entry(allocated: usize, entry_bytes: usize) -> usize {
     (allocated % LINES_PER_PAGE * CACHE_LINE).div_ceil(entry_bytes.max(1))
 }
 
+/// No entries.
+impl<T> Default for ParticleArray<T> {
+    fn default() -> Self {
+        Self { storage: Vec::new(), start: 0 }
+    }
+}
+
 impl<T> Deref for ParticleArray<T> {
     type Target = [T];
     fn deref(&self) -> &[T] {
