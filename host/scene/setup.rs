@@ -1,7 +1,7 @@
 //! Initial particles of a scene: fluid blocks and boundary walls on the particle lattice.
 
 use crate::scene::particle_limit::ParticleLimit;
-use crate::scene::{Boundary, DensityKernelKind, Scene, SceneError};
+use crate::scene::{Boundary, DensityEquation, DensityKernelKind, Scene, SceneError};
 use crate::simulation::inlet::Inlet;
 use coil_kernels::smoothing::SmoothingKernels;
 use coil_kernels::{Real, Vec3};
@@ -252,7 +252,7 @@ pub fn initial_particles_within(scene: &Scene, file: &str, limit: &ParticleLimit
     let mass = calibrated_mass(scene.material.rest_density_kg_m3, s, scene.support_radius(), scene.material.density_kernel);
     let mut smallest_layer = usize::MAX;
     for (k, config) in scene.inlets.iter().enumerate() {
-        let inlet = Inlet::new(config, s, scene.support_radius(), mass, scene.material.rest_density_kg_m3);
+        let inlet = Inlet::new(config, s, scene.support_radius(), rest_volume(scene, mass), scene.material.rest_density_kg_m3);
         smallest_layer = smallest_layer.min(inlet.layer_size());
         let end = scene.simulation.end_time_s;
         let (start, stop) = inlet.active();
@@ -279,7 +279,7 @@ pub fn initial_particles_within(scene: &Scene, file: &str, limit: &ParticleLimit
             return Err(err(
                 format!("inlet[{k}].nozzle"),
                 format!(
-                    "at spacing {s} m its section holds {} lattice point(s), so to deliver rho0 A U its layers would be {apart:.2} spacings apart ({MIN_LAYER_DISTANCE} to {MAX_LAYER_DISTANCE} make a continuous jet); widen it to a radius (circle), or a width and depth (rectangle), of at least a spacing, or refine material.particle_spacing_m",
+                    "at spacing {s} m its section holds {} lattice point(s), so to deliver A U at rest density its layers would be {apart:.2} spacings apart ({MIN_LAYER_DISTANCE} to {MAX_LAYER_DISTANCE} make a continuous jet); widen it to a radius (circle), or a width and depth (rectangle), of at least a spacing, or refine material.particle_spacing_m",
                     inlet.layer_size()
                 ),
             ));
@@ -359,6 +359,20 @@ pub fn calibrated_mass(rest_density: f64, spacing: f64, support_radius: f64, ker
         }
     }
     rest_density / sum
+}
+
+/// The volume (m^3) a particle of `mass` (kg) fills at rho0. Where density is summed (Eq. 5)
+/// it is a lattice cell, s^3: the calibrated mass makes the full cubic lattice of spacing s sum
+/// to rho0, and a lattice packed closer sums above it: with m / rho0 instead (0.81 s^3 with the
+/// spiky kernel) a 5-across jet's layers lay 0.86 spacings apart and summed to 1.09 to 1.12
+/// rho0 in the nozzle, which a pressure solve then released at once, kicking the layer below
+/// the exit from 1 to 1.6 m/s. Where density follows the continuity
+/// equation each particle starts at rho0, and its volume is m / rho0.
+pub fn rest_volume(scene: &Scene, mass: f64) -> f64 {
+    match scene.material.density_equation {
+        DensityEquation::Summation => scene.material.particle_spacing_m.powi(3),
+        DensityEquation::Continuity => mass / scene.material.rest_density_kg_m3,
+    }
 }
 
 /// The kernels of support `support_radius` calibrated on the cubic lattice of `spacing` (m),

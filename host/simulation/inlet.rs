@@ -70,10 +70,12 @@ fn nozzle_axes(d: [f64; 3]) -> ([f64; 3], [f64; 3]) {
 }
 
 impl Inlet {
-    /// `mass` (kg) and `rest_density` (kg/m^3) fix the layer distance that makes the mass flow
-    /// rate equal rho0 A U for the nozzle's nominal area A. The tube is one support radius
-    /// `support_radius` (m) long, so the first free layer below the exit has full support.
-    pub fn new(config: &scene::InletSettings, spacing: f64, support_radius: f64, mass: f64, rest_density: f64) -> Self {
+    /// `rest_volume` (m^3, `setup::rest_volume`), the volume a particle fills at rho0, fixes the
+    /// layer distance that makes the volume flow rate A U for the nozzle's nominal area A, so
+    /// that the inlet delivers rho0 A U of fluid at rest density; new particles start at
+    /// `rest_density` (kg/m^3). The tube is one support radius `support_radius` (m) long, so the
+    /// first free layer below the exit has full support.
+    pub fn new(config: &scene::InletSettings, spacing: f64, support_radius: f64, rest_volume: f64, rest_density: f64) -> Self {
         let direction = normalized(config.direction);
         let (e1, e2) = nozzle_axes(direction);
         let mut offsets = Vec::new();
@@ -103,7 +105,7 @@ impl Inlet {
             }
         };
         let layer: Vec<[f64; 3]> = offsets.iter().map(|&(a, b)| [0, 1, 2].map(|k| a * e1[k] + b * e2[k])).collect();
-        let layer_distance = layer.len() as f64 * mass / (rest_density * area);
+        let layer_distance = layer.len() as f64 * rest_volume / area;
         Self {
             layer,
             direction,

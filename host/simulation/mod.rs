@@ -13,7 +13,7 @@ pub mod time_step;
 
 use crate::cpu::neighbor_grid::NeighborGrid;
 use crate::cpu::{CpuBackend, NeighborVisits};
-use crate::scene::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, InitialParticles};
+use crate::scene::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, rest_volume, InitialParticles};
 use crate::scene::{DensityKernelKind, Pressure, Scene, ViscositySolver, ViscousVelocity, Walls};
 use crate::simulation::divergence_free::PressureSolve;
 use crate::simulation::inlet::Inlet;
@@ -199,7 +199,8 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
         let h = scene.support_radius();
         let s = mat.particle_spacing_m;
         let mass = calibrated_mass(mat.rest_density_kg_m3, s, h, mat.density_kernel);
-        let inlets: Vec<Inlet> = scene.inlets.iter().map(|c| Inlet::new(c, s, h, mass, mat.rest_density_kg_m3)).collect();
+        let volume = rest_volume(scene, mass);
+        let inlets: Vec<Inlet> = scene.inlets.iter().map(|c| Inlet::new(c, s, h, volume, mat.rest_density_kg_m3)).collect();
         let fluid_capacity = scene.simulation.max_fluid_particles.unwrap_or(0).max(initial.fluid.len());
         let boundary_count = initial.boundary.len();
         let kernels = calibrated_kernels::<R>(mat.rest_density_kg_m3, s, h, mat.density_kernel);
