@@ -27,7 +27,8 @@ pub struct Inlet {
     start: f64,
     stop: f64,
     motion: Option<NozzleMotion>,
-    /// Distance between layers (m), set so the inlet delivers exactly rho0 A U.
+    /// Distance between layers (m), set so the inlet delivers exactly the volume A U at rest
+    /// density.
     layer_distance: f64,
     /// How far the newest layer has travelled from the nozzle (m).
     travelled: f64,
