@@ -173,39 +173,23 @@ impl<T: Topology> Neighborhood<'_, T> {
     /// `x` of the domain (m), in the order of [`Neighbors::for_each_neighbor`]; none when `x` lies
     /// outside the domain box.
     #[inline(always)]
-    pub fn for_each_particle_near<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, x: [f64; 3], h2: R, mut f: F) {
-        // Candidates are filtered in f64 and only neighbors are rounded to `R`: about 6 of 7
-        // candidates in the 27 cells lie outside the support.
-        let h2_f64 = h2.to_f64();
-        self.for_each_candidate_run(x, |start, end| {
-            R::tally_candidates(end - start);
-            for j in start..end {
-                let (r_ij, r2) = self.separation(x, j);
-                if r2 < h2_f64 {
-                    f(j, Vec3::from_f64(r_ij), R::from_f64(r2));
-                }
-            }
-        });
-    }
-
-    /// Calls `run(start, end)` for each run of particle indices whose cells lie within one cell
-    /// of `x`'s, in the order of [`Self::for_each_particle_near`]; none when `x` lies outside
-    /// the grid.
-    #[inline(always)]
-    pub fn for_each_candidate_run<F: FnMut(usize, usize)>(&self, x: [f64; 3], run: F) {
+    pub fn for_each_particle_near<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, x: [f64; 3], h2: R, f: F) {
         if T::PERIODIC {
-            self.for_each_candidate_run_periodic(x, run);
+            self.for_each_particle_near_periodic(x, h2, f);
         } else {
-            self.for_each_candidate_run_open(x, run);
+            self.for_each_particle_near_open(x, h2, f);
         }
     }
 
-    /// The open domain's runs: three x-adjacent cells are one contiguous run.
+    /// The open domain's loop: three x-adjacent cells are one contiguous run.
     #[inline(always)]
-    fn for_each_candidate_run_open<F: FnMut(usize, usize)>(&self, xi: [f64; 3], mut run: F) {
+    fn for_each_particle_near_open<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, xi: [f64; 3], h2: R, mut f: F) {
         let Some(c) = self.grid.cell_coords(xi) else {
             return;
         };
+        // Candidates are filtered in f64 and only neighbors are rounded to `R`: about 6 of 7
+        // candidates in the 27 cells lie outside the support.
+        let h2_f64 = h2.to_f64();
         let dims = self.grid.dims;
         let x_lo = c[0].saturating_sub(1);
         let x_hi = if c[0] + 1 < dims[0] { c[0] + 1 } else { c[0] };
@@ -213,20 +197,29 @@ impl<T: Topology> Neighborhood<'_, T> {
             for y in c[1].saturating_sub(1)..=(c[1] + 1).min(dims[1] - 1) {
                 let first = self.grid.linear_index([x_lo, y, z]) as usize;
                 let last = self.grid.linear_index([x_hi, y, z]) as usize;
-                run(self.cell_start.at(first) as usize, self.cell_start.at(last + 1) as usize);
+                let start = self.cell_start.at(first) as usize;
+                let end = self.cell_start.at(last + 1) as usize;
+                R::tally_candidates(end - start);
+                for j in start..end {
+                    let (r_ij, r2) = self.separation(xi, j);
+                    if r2 < h2_f64 {
+                        f(j, Vec3::from_f64(r_ij), R::from_f64(r2));
+                    }
+                }
             }
         }
     }
 
-    /// The periodic domain's runs: cells wrap along periodic axes (which hold at least 3 cells,
+    /// The periodic domain's loop: cells wrap along periodic axes (which hold at least 3 cells,
     /// so no cell is visited twice), and x-runs split where they cross the seam.
     #[inline(always)]
-    fn for_each_candidate_run_periodic<F: FnMut(usize, usize)>(&self, xi: [f64; 3], mut run: F) {
+    fn for_each_particle_near_periodic<R: Real, F: FnMut(usize, Vec3<R>, R)>(&self, xi: [f64; 3], h2: R, mut f: F) {
         let Some(c) = self.grid.cell_coords(xi) else {
             return;
         };
         let period = self.topology.periods();
         let wrap = Periodic { origin: self.grid.origin, period };
+        let h2_f64 = h2.to_f64();
         let dx_cells = self.grid.dims[0];
         // The x cells c-1..=c+1 as at most two contiguous runs, held in scalars: an array
         // indexed in the loop would live in the device's local memory.
@@ -237,18 +230,24 @@ impl<T: Topology> Neighborhood<'_, T> {
         } else {
             ((c[0].saturating_sub(1), if c[0] + 1 < dx_cells { c[0] + 1 } else { c[0] }), None)
         };
-        let mut cells = |(x_lo, x_hi): (u32, u32), y: u32, z: u32| {
+        let mut run = |(x_lo, x_hi): (u32, u32), y: u32, z: u32| {
             let start = self.cell_start.at(self.grid.linear_index([x_lo, y, z]) as usize) as usize;
             let end = self.cell_start.at(self.grid.linear_index([x_hi, y, z]) as usize + 1) as usize;
-            run(start, end);
+            R::tally_candidates(end - start);
+            for j in start..end {
+                let (r_ij, r2) = self.separation(xi, j);
+                if r2 < h2_f64 {
+                    f(j, Vec3::from_f64(r_ij), R::from_f64(r2));
+                }
+            }
         };
         for dz in -1..=1 {
             let Some(z) = wrap.neighbor_cell(&self.grid, 2, c[2], dz) else { continue };
             for dy in -1..=1 {
                 let Some(y) = wrap.neighbor_cell(&self.grid, 1, c[1], dy) else { continue };
-                cells(first, y, z);
+                run(first, y, z);
                 if let Some(second) = second {
-                    cells(second, y, z);
+                    run(second, y, z);
                 }
             }
         }

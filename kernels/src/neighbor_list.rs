@@ -42,10 +42,6 @@ pub struct NeighborListArgs<'a, R, T> {
 /// Records particle `i`'s neighbors, in the grid's order, and their gradients where kept. A
 /// boundary particle away from fluid gets an empty list: no pass reads its neighbors (on a
 /// jet's plate most of the wall particles, a third of a small scene's particles).
-///
-/// The candidates are filtered without a branch: each is written to the next free slot and
-/// the slot taken only if it lies within h. About one candidate in six does, in no order a
-/// branch predictor learns, and a mispredicted branch per neighbor took a third of the pass.
 #[inline(always)]
 pub fn neighbor_list_pass<R: Real, T: Topology>(i: usize, a: &NeighborListArgs<R, T>) {
     let base = i * NEIGHBOR_SLOTS;
@@ -54,31 +50,20 @@ pub fn neighbor_list_pass<R: Real, T: Topology>(i: usize, a: &NeighborListArgs<R
         unsafe { a.list.write(base, 0) };
         return;
     }
-    let xi = a.neighborhood.position.at(i);
-    let h2 = a.kernels.h2.to_f64();
-    // Slots 1 ..= NEIGHBOR_SLOTS - 1 as the list has them, and one more that takes every
-    // candidate once those are full.
-    let mut slots = [0u32; NEIGHBOR_SLOTS + 1];
+    let gradients = !a.spiky_gradient.is_empty();
     let mut count = 0;
-    a.neighborhood.for_each_candidate_run(xi, |start, end| {
-        R::tally_candidates(end - start);
-        for j in start..end {
-            let (_, r2) = a.neighborhood.separation(xi, j);
-            slots[(count + 1).min(NEIGHBOR_SLOTS)] = j as u32;
-            count += (r2 < h2) as usize;
+    a.neighborhood.for_each_neighbor(i, a.kernels.h2, |j, r_ij, r2: R| {
+        count += 1;
+        if count < NEIGHBOR_SLOTS {
+            // SAFETY: invocation i owns slots base .. base + NEIGHBOR_SLOTS.
+            unsafe { a.list.write(base + count, j as u32) };
+            if gradients {
+                let g = a.kernels.spiky_gradient(r_ij, r2);
+                // SAFETY: as above.
+                unsafe { a.spiky_gradient.write(base + count, [g.x, g.y, g.z]) };
+            }
         }
     });
-    let gradients = !a.spiky_gradient.is_empty();
-    for (k, &j) in slots.iter().enumerate().take(count.min(NEIGHBOR_SLOTS - 1) + 1).skip(1) {
-        // SAFETY: invocation i owns slots base .. base + NEIGHBOR_SLOTS.
-        unsafe { a.list.write(base + k, j) };
-        if gradients {
-            let (r_ij, r2) = a.neighborhood.separation(xi, j as usize);
-            let g = a.kernels.spiky_gradient(Vec3::from_f64(r_ij), R::from_f64(r2));
-            // SAFETY: as above.
-            unsafe { a.spiky_gradient.write(base + k, [g.x, g.y, g.z]) };
-        }
-    }
     // SAFETY: as above.
     unsafe { a.list.write(base, count as u32) };
 }
