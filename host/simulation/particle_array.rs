@@ -22,7 +22,8 @@ const LINES_PER_PAGE: usize = 64;
 /// Arrays allocated so far, which sets the next one's offset.
 static ALLOCATED: AtomicUsize = AtomicUsize::new(0);
 
-/// `len` entries of `T` that start `offset` lines into their storage; derefs to the entries.
+/// `len` entries of `T` that start a number of cache lines into their storage (`start_entry`);
+/// derefs to the entries.
 pub struct ParticleArray<T> {
     storage: Vec<T>,
     start: usize,
