@@ -211,17 +211,19 @@ fn paper_jet_from_h_over_d_12() -> Scene {
 
 /// The paper's jet from H/D = 12 has no room above Eq. (10), unlike the channels and the drop: at
 /// the bound its fastest particle moves at 2.2 m/s to 0.8 s; at 1.5 times the bound the rope
-/// folds as at the bound but a particle is thrown past the guard's 9.2 m/s at 0.508 s (measured;
-/// the guard's former c instead of 0.1 c let it reach 16.1 m/s unstopped). The guard must stop
-/// it there, name dt as the likely cause and keep the frames written before, the rope's whole
-/// fall onto the plate among them. (The shipped formulation ran to 0.6 s at 1.5 times the bound,
-/// its fastest particle at 2.31 m/s.)
+/// folds as at the bound but a particle was thrown past the guard's 9.2 m/s at 0.508 s (the
+/// guard's former c instead of 0.1 c let it reach 16.1 m/s unstopped), and, since the inlet
+/// spaces its layers 1 % further apart, to 8.7 m/s by 0.6 s, just under the guard: where the
+/// thrown particle lands is chaotic. At twice the bound the guard must stop it, name dt as the
+/// likely cause and keep the frames written before, the rope's whole fall onto the plate among
+/// them. (The shipped formulation ran to 0.6 s at 1.5 times the bound, its fastest particle at
+/// 2.31 m/s.)
 #[test]
-fn the_jet_at_one_and_a_half_times_the_bound_is_stopped_by_the_guard() {
+fn the_jet_at_twice_the_bound_is_stopped_by_the_guard() {
     let mut scene = paper_jet_from_h_over_d_12();
     // The validation's name for the case has a '/', and a run names its files after its scene.
     scene.name = "newtonian_jet".into();
-    scene.simulation.time_step.safety_factor = 1.5;
+    scene.simulation.time_step.safety_factor = 2.0;
     scene.simulation.time_step.allow_above_stability_bound = true;
     let out = std::env::temp_dir().join(format!("coil-stability-jet-{}", std::process::id()));
     let result = run(&scene, "newtonian_jet.toml", &quiet_run_options(&out));
