@@ -273,22 +273,10 @@ fn the_eta_counts_the_particles_a_jet_will_add() {
 #[test]
 fn a_divergence_free_jet_leaves_the_nozzle_at_rest_density_and_speed() {
     let out = std::env::temp_dir().join(format!("coil-df-nozzle-{}", std::process::id()));
-    let sets = [
-        "simulation.pressure=divergence_free",
-        "material.density_equation=summation",
-        "material.density_kernel=spiky",
-        "material.viscosity.solver=implicit",
-        "material.viscosity.velocity_gradient=own_density",
-        "simulation.particle_shifting=0",
-        "material.viscosity.implicit.tolerance=1e-2",
-        "simulation.end_time_s=0.1",
-        "output.every_s=0.1",
-    ];
-    let mut args = vec!["run", "scenes/newtonian_jet.toml", "--quiet", "--overwrite", "--out", out.to_str().expect("utf-8")];
-    for set in &sets {
-        args.extend(["--set", set]);
-    }
-    let run = common::coil(&args);
+    let run = common::run_divergence_free_jet(
+        &out,
+        &["material.viscosity.implicit.tolerance=1e-2", "simulation.end_time_s=0.1", "output.every_s=0.1"],
+    );
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     let log: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).expect("run log")).expect("json");

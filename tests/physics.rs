@@ -273,23 +273,15 @@ fn water_dam_break_with_divergence_free_pressure(walls: &str) {
 #[test]
 fn a_long_falling_jet_holds_together_with_divergence_free_pressure() {
     let out = std::env::temp_dir().join(format!("coil-df-jet-{}", std::process::id()));
-    let sets = [
-        "simulation.pressure=divergence_free",
-        "material.density_equation=summation",
-        "material.density_kernel=spiky",
-        "material.viscosity.solver=implicit",
-        "material.viscosity.velocity_gradient=own_density",
-        "simulation.particle_shifting=0",
-        "inlet[0].position_m=[0.0,0.24,0.0]",
-        "domain.max_m=[0.07,0.27,0.07]",
-        "simulation.end_time_s=0.25",
-        "output.every_s=0.25",
-    ];
-    let mut args = vec!["run", "scenes/newtonian_jet.toml", "--quiet", "--overwrite", "--out", out.to_str().expect("utf-8")];
-    for set in &sets {
-        args.extend(["--set", set]);
-    }
-    let run = common::coil(&args);
+    let run = common::run_divergence_free_jet(
+        &out,
+        &[
+            "inlet[0].position_m=[0.0,0.24,0.0]",
+            "domain.max_m=[0.07,0.27,0.07]",
+            "simulation.end_time_s=0.25",
+            "output.every_s=0.25",
+        ],
+    );
     std::fs::remove_dir_all(&out).ok();
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
 }

@@ -122,3 +122,22 @@ pub fn quiet_run_options(out: &std::path::Path) -> coil::run::RunOptions {
         stop: None,
     }
 }
+
+/// Runs `coil run scenes/newtonian_jet.toml` into `out` with divergence-free pressure and
+/// implicit viscosity (the settings of its `divergence_free` variant but the viscosity
+/// tolerance) and the `extra` settings.
+pub fn run_divergence_free_jet(out: &std::path::Path, extra: &[&str]) -> Output {
+    let sets = [
+        "simulation.pressure=divergence_free",
+        "material.density_equation=summation",
+        "material.density_kernel=spiky",
+        "material.viscosity.solver=implicit",
+        "material.viscosity.velocity_gradient=own_density",
+        "simulation.particle_shifting=0",
+    ];
+    let mut args = vec!["run", "scenes/newtonian_jet.toml", "--quiet", "--overwrite", "--out", out.to_str().expect("utf-8")];
+    for set in sets.iter().chain(extra) {
+        args.extend(["--set", set]);
+    }
+    coil(&args)
+}
