@@ -1671,7 +1671,8 @@ fn the_renormalized_gradient_is_exact_for_a_linear_field_at_a_free_surface() {
 }
 
 /// The shift (m) of particle `i` of `p` by particle shifting with A = 2 over `dt` (s), the
-/// free-surface projection at the run's threshold or (`projection` false) off.
+/// free-surface projection at the run's threshold or (`projection` false) off, at most
+/// `largest_shift` (m) long.
 fn lattice_shift(
     p: &coil::simulation::particles::Particles<f64>,
     grid: &coil::cpu::neighbor_grid::NeighborGrid,
@@ -1679,6 +1680,7 @@ fn lattice_shift(
     i: usize,
     dt: f64,
     projection: bool,
+    largest_shift: f64,
 ) -> Vec3<f64> {
     use coil::simulation::particles::vec3_view;
     use coil_kernels::shifting_sun2017::{particle_shift, Shifting, ShiftingArgs};
@@ -1693,6 +1695,7 @@ fn lattice_shift(
             coefficient: 2.0 * fluid.kernels.h,
             inverse_spacing_weight: 1.0 / fluid.kernels.spiky(LATTICE_SPACING * LATTICE_SPACING),
             surface_divergence: if projection { 2.75 } else { 0.0 },
+            largest_shift,
         },
         dt,
         id: View::new(&p.id[..n]),
@@ -1708,9 +1711,12 @@ fn lattice_shift(
 /// concentration gradient alone would) but still restores them along it: by 0.63 of the
 /// interior's shift, and slightly inwards, because the offset tilts the surface normal that the
 /// projection takes from the concentration gradient. The fluid moves 10 um a step, 1/2000 of h.
+/// A particle nearly on top of its neighbor, under the anti-clumping weight, shifts a quarter
+/// spacing away from it, where the diffusion cap alone would throw it spacings.
 #[test]
 fn particle_shifting_restores_a_lattice_and_keeps_a_free_surface() {
     use coil::simulation::particles::ModelFields;
+    use coil_kernels::shifting_sun2017::LARGEST_SHIFT_SPACINGS;
     let fields = ModelFields { shift: true, ..ModelFields::default() };
     let nearest = |p: &coil::simulation::particles::Particles<f64>, site: [f64; 3]| {
         (0..p.len())
@@ -1726,26 +1732,37 @@ fn particle_shifting_restores_a_lattice_and_keeps_a_free_surface() {
     let interior = nearest(&p, [5.5 * s, 2.5 * s, 5.5 * s]);
     let surface = nearest(&p, [5.5 * s, 5.5 * s, 5.5 * s]);
     let dt = 1e-5;
-    let at_rest = lattice_shift(&p, &grid, fluid, interior, dt, true);
+    let largest = LARGEST_SHIFT_SPACINGS * s;
+    let shift = |p: &coil::simulation::particles::Particles<f64>, i, dt, projection| {
+        lattice_shift(p, &grid, fluid, i, dt, projection, largest)
+    };
+    let at_rest = shift(&p, interior, dt, true);
     assert!(at_rest.norm() < 1e-15, "a lattice particle shifts by {at_rest:?} m");
-    let outward = lattice_shift(&p, &grid, fluid, surface, dt, false);
+    let outward = shift(&p, surface, dt, false);
     assert!(outward.y > 1e-6, "without the projection a surface particle moves out by {} m", outward.y);
-    let along = lattice_shift(&p, &grid, fluid, surface, dt, true);
+    let along = shift(&p, surface, dt, true);
     assert!(along.norm() < 1e-15, "a surface lattice particle shifts by {along:?} m");
     // Each particle moved 0.3 spacings along x (within its grid cell), towards its neighbor.
     let offset = 0.3 * s;
     let diffusion = 2.0 * fluid.kernels.h * 1.0 * dt;
     for (i, restored) in [(interior, 1.0), (surface, 0.63)] {
         p.position[0][i] += offset;
-        let shift = lattice_shift(&p, &grid, fluid, i, dt, true);
+        let moved = shift(&p, i, dt, true);
         let expected = -28.0 * restored * diffusion * offset / fluid.kernels.h2;
-        println!("shift {shift:?} m, expected about {expected:.3e} m along x");
-        assert!((shift.x / expected - 1.0).abs() < 0.1, "a particle 0.3 spacings off its site shifts by {} m along x", shift.x);
-        assert!(shift.y < 1e-3 * shift.x.abs(), "and by {} m out of the fluid", shift.y);
-        let capped = lattice_shift(&p, &grid, fluid, i, 1.0, true);
+        println!("shift {moved:?} m, expected about {expected:.3e} m along x");
+        assert!((moved.x / expected - 1.0).abs() < 0.1, "a particle 0.3 spacings off its site shifts by {} m along x", moved.x);
+        assert!(moved.y < 1e-3 * moved.x.abs(), "and by {} m out of the fluid", moved.y);
+        let capped = shift(&p, i, 1.0, true);
         assert!(capped.x < 0.0 && capped.x > -offset, "a long step shifts it by {} m: overshoot", capped.x);
         p.position[0][i] -= offset;
     }
+    // 0.95 spacings along x, 0.05 spacings from its neighbor's site.
+    p.position[0][interior] += 0.95 * s;
+    let thrown = lattice_shift(&p, &grid, fluid, interior, 1.0, true, f64::INFINITY);
+    let held = shift(&p, interior, 1.0, true);
+    println!("beside its neighbor: shifted {thrown:?} m uncapped, {held:?} m capped");
+    assert!(thrown.norm() > 2.0 * s, "uncapped it shifts {} spacings", thrown.norm() / s);
+    assert!((held.norm() / largest - 1.0).abs() < 1e-12 && held.x < 0.0, "capped it shifts {held:?} m");
 }
 
 /// The device's f64 `exp2` and `log2` (arithmetic alone, since PTX has them only in f32) against

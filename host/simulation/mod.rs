@@ -30,7 +30,7 @@ use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::LeapfrogArgs;
 use coil_kernels::mirrored_wall::MirroredWallArgs;
 use coil_kernels::nozzle::{NozzleArgs, NozzleShiftArgs};
-use coil_kernels::shifting_sun2017::{ShiftArgs, Shifting, ShiftingArgs};
+use coil_kernels::shifting_sun2017::{ShiftArgs, Shifting, ShiftingArgs, LARGEST_SHIFT_SPACINGS};
 use coil_kernels::topology::{Open, Topology};
 use coil_kernels::{Real, Vec3};
 pub use run_state::RunState;
@@ -126,7 +126,7 @@ impl fmt::Display for Instability {
         } else if self.pressure_solved {
             write!(
                 f,
-                "dt = {:.3e} s was within the bound of the terms not solved; likely causes: particle shifting, which moves particles after the pressure solve (set simulation.particle_shifting = 0: with it a jet 3 D above its plate blew up), a CFL step too long for the flow (lower simulation.divergence_free.cfl_factor or max_time_step_s), pressure left unsolved between steps (raise simulation.divergence_free.min_iterations or lower its tolerances, or its relaxation), or particles injected into walls.",
+                "dt = {:.3e} s was within the bound of the terms not solved; likely causes: a CFL step too long for the flow (lower simulation.divergence_free.cfl_factor or max_time_step_s), pressure left unsolved between steps (raise simulation.divergence_free.min_iterations or lower its tolerances, or its relaxation), or particles injected into walls.",
                 self.dt_s
             )
         } else {
@@ -208,6 +208,7 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
             coefficient: R::from_f64(scene.simulation.particle_shifting * h),
             inverse_spacing_weight: R::ONE / kernels.spiky(R::from_f64(s * s)),
             surface_divergence: R::from_f64(SURFACE_POSITION_DIVERGENCE),
+            largest_shift: R::from_f64(LARGEST_SHIFT_SPACINGS * s),
         });
         let fields = M::FIELDS.with_scene(scene);
         let mut particles = Particles::with_capacity(boundary_count + fluid_capacity, fields);
