@@ -289,7 +289,7 @@ fn a_long_falling_jet_holds_together_with_divergence_free_pressure() {
 /// The same jet from H/D = 3, its particles shifted (A = 2): at the CFL step the shift's
 /// diffusion is at its cap wherever the fluid moves, and without the cap on the shift's length
 /// one particle, nearly on top of another where the rope lands, was thrown through the plate in
-/// two steps and the run stopped at 0.094 s. Capped, the rope lands and no particle leaves the
+/// two steps and the run stopped before 0.1 s. Capped, the rope lands and no particle leaves the
 /// domain.
 #[test]
 fn a_shifted_divergence_free_jet_lands_on_its_plate() {
