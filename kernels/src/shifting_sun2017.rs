@@ -65,8 +65,8 @@ const LARGEST_DIFFUSION: f64 = 1.0 / 32.0;
 /// coincidence), so where the diffusion cap binds, as it does at the CFL step of divergence-free
 /// pressure, a particle almost on top of another would be thrown several spacings: one crossed a
 /// jet's plate in two steps. A quarter spacing still parts a close pair within a step or two
-/// and never moves a particle past a neighbor; under Eq. (10)'s bound it does not bind (the
-/// shipped Newtonian jet's frames are unchanged by it).
+/// and cannot carry a particle through a layer of its neighbors; under Eq. (10)'s bound it does
+/// not bind (the shipped Newtonian jet's frames to 0.3 s are unchanged by it).
 pub const LARGEST_SHIFT_SPACINGS: f64 = 0.25;
 
 /// The shift of fluid particle `i` (m): -A h |v_i| dt sum_j V_j (1 + 0.2 (W_ij / W(dx))^4)
