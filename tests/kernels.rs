@@ -171,6 +171,7 @@ fn fluid<R: Real>() -> Fluid<R> {
         pressure_floor: R::from_f64(f64::NEG_INFINITY),
         wall_density_floor: R::ZERO,
         pressure_pair_weight: R::from_f64(0.5),
+        wall_stiffness_share: R::ZERO,
         gravity: Vec3::zero(),
         kernels: SmoothingKernels::new(0.01),
         boundary_count: 0,
@@ -1805,4 +1806,56 @@ fn the_devices_f64_exp2_and_log2_are_f64_accurate() {
     assert_eq!(log2(0.0), f64::NEG_INFINITY);
     assert_eq!(log2(f64::INFINITY), f64::INFINITY);
     assert_eq!(log2(8.0), 3.0);
+}
+
+/// The solved pressure's field on a lattice with walls in its lowest two layers (z down, g
+/// along -z): a linear pressure rho0 g depth reads exactly, on the layer on the walls too where
+/// they mirror it with its head, and a pressure alternating layer by layer reads
+/// (204 - 2 x 63) / (204 + 2 x 63) of its swing, the poly6 weights of a layer and of each
+/// layer beside it (h = 2 spacings: 64 + 4 x 27 + 4 x 8, and 27 + 4 x 8 + 4 x 1). Pushing once,
+/// the walls are left out and the layer on them reads towards the layer above.
+#[test]
+fn the_solved_pressure_reads_as_its_interpolant_with_the_walls_mirroring_it() {
+    use coil::simulation::particles::ModelFields;
+    use coil_kernels::dfsph_bender2017::pressure_field;
+    let cells = 8;
+    let s = LATTICE_SPACING;
+    let walls = (2 * cells * cells) as u32;
+    let fields = ModelFields { pressure_solve: true, ..ModelFields::default() };
+    let (mut p, grid, fluid) = sorted_lattice(cells, fields, |_| true, |_| [0.0; 3]);
+    let (rho0, g) = (LATTICE_REST_DENSITY, 9.81);
+    let top = cells as f64 * s;
+    let layer = |z: f64| (z / s).floor() as i64;
+    let n = p.len();
+    p.density[..n].fill(rho0);
+    let at = |k: i64| {
+        (0..n)
+            .find(|&j| layer(p.position[2][j]) == k && [0, 1].iter().all(|&a| layer(p.position[a][j]) == cells as i64 / 2))
+            .expect("a site")
+    };
+    let (interior, floor) = (at(4), at(2));
+    let exact = [interior, floor].map(|i| rho0 * g * (top - p.position[2][i]));
+    let mut reading = |share: f64, swing: f64, i: usize| {
+        let fluid = Fluid { boundary_count: walls, gravity: Vec3::new(0.0, 0.0, -g), wall_stiffness_share: share, ..fluid };
+        let solve = p.pressure_solve.as_mut().expect("allocated");
+        for j in 0..n {
+            let z = p.position[2][j];
+            let sign = if layer(z) % 2 == 0 { 1.0 } else { -1.0 };
+            solve.stiffness_sums[0][j] = (rho0 * g * (top - z) + sign * swing) / (rho0 * rho0);
+            solve.stiffness_sums[1][j] = 0.0;
+        }
+        let sums = &p.pressure_solve.as_ref().expect("allocated").stiffness_sums;
+        let sums = [View::new(&sums[0][..n]), View::new(&sums[1][..n])];
+        let neighborhood = grid.neighborhood(p.position_view(), Open);
+        pressure_field(i, &neighborhood, &fluid, View::new(&p.id[..n]), View::new(&p.density[..n]), sums)
+    };
+    let swing = 100.0;
+    let relative = |got: f64, want: f64| ((got - want) / want).abs();
+    assert!(relative(reading(1.0, 0.0, interior), exact[0]) < 1e-12);
+    assert!(relative(reading(1.0, 0.0, floor), exact[1]) < 1e-12);
+    let alternating = reading(1.0, swing, interior) - exact[0];
+    assert!((alternating / swing - 78.0 / 330.0).abs() < 1e-9, "{alternating}");
+    let once = reading(0.0, 0.0, floor);
+    let above = exact[1] - rho0 * g * s * 63.0 / (204.0 + 63.0);
+    assert!(relative(once, above) < 1e-12, "{once} against {above}");
 }

@@ -18,7 +18,7 @@ pub struct Frame {
     pub velocity: Vec<[f32; 3]>,
     /// kg/m^3
     pub density: Vec<f32>,
-    /// Pa, Eq. (6)
+    /// Pa, Eq. (6), or the solved pressure's field
     pub pressure: Vec<f32>,
     /// Kinematic viscosity nu (m^2/s), Eq. (3)
     pub viscosity: Vec<f32>,
@@ -64,7 +64,7 @@ impl Frame {
             self.position.push([0, 1, 2].map(|a| p.position[a][i]));
             self.velocity.push([0, 1, 2].map(|a| p.velocity[a][i].to_f64() as f32));
             self.density.push(rho.to_f64() as f32);
-            self.pressure.push(p.pressure(i, &fluid).to_f64() as f32);
+            self.pressure.push(host.pressure(i, &fluid, &neighborhood).to_f64() as f32);
             self.viscosity.push(run.model.law().viscosity(R::from_f64(d as f64)).to_f64() as f32);
             self.shear_rate.push(d);
             self.id.push(p.id[i]);

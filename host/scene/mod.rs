@@ -504,6 +504,39 @@ pub struct DivergenceFree {
     /// The largest dt (s), which also holds while the fluid is at rest.
     #[serde(default = "default_max_time_step")]
     pub max_time_step_s: f64,
+    /// What a wall particle pushes with. Left out of the resolved scene at its default, so that
+    /// checkpoints taken before the field existed keep their fingerprint.
+    #[serde(default, skip_serializing_if = "WallPressure::is_once")]
+    pub wall_pressure: WallPressure,
+}
+
+/// What a wall particle pushes with in the pressure solves.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum WallPressure {
+    /// The stiffness of the fluid particle beside it, once (SPlisHSPlasH's walls): the layer
+    /// on a floor reads about twice rho0 g depth.
+    #[default]
+    Once,
+    /// That stiffness mirrored onto the wall plus the hydrostatic head between them (Akinci et
+    /// al. 2012, Band et al. 2018): a liquid at rest reads rho0 g depth, but a channel's flow
+    /// along its walls is held back (the start-up channel's error on mirrored walls: 0.10,
+    /// against 0.043 once).
+    Mirrored,
+}
+
+impl WallPressure {
+    fn is_once(&self) -> bool {
+        *self == WallPressure::Once
+    }
+
+    /// The share of a particle's stiffness that a wall pushes back with on top of its own.
+    pub fn stiffness_share(self) -> f64 {
+        match self {
+            WallPressure::Once => 0.0,
+            WallPressure::Mirrored => 1.0,
+        }
+    }
 }
 
 fn default_density_tolerance() -> f64 {
@@ -549,6 +582,7 @@ impl Default for DivergenceFree {
             on_no_convergence: warn(),
             cfl_factor: default_cfl_factor(),
             max_time_step_s: default_max_time_step(),
+            wall_pressure: WallPressure::Once,
         }
     }
 }

@@ -21,6 +21,15 @@ use coil_kernels::Real;
 /// all of it carries the last step's errors over and reads them 3 % to 60 % low.
 const WARM_START_SHARE: f64 = 0.5;
 
+/// What a solve's sweeps push: `scale` times the pressure acceleration is added to `values`,
+/// and the first sweep adds `wall_head` times the walls' hydrostatic head.
+#[derive(Clone, Copy)]
+struct Target<'v, R> {
+    values: Vec3ViewMut<'v, R>,
+    scale: R,
+    wall_head: R,
+}
+
 /// What one step's pressure solves read and write.
 pub struct PressureSolve<'a, R, N> {
     pub settings: DivergenceFree,
@@ -90,7 +99,8 @@ impl<R: Real, N: Neighbors> PressureSolve<'_, R, N> {
                 error: x.error,
             })
         };
-        self.sweeps(backend, self.settings.divergence_tolerance, error, self.velocity_half, self.kick_dt, x.divergence_sum)
+        let target = Target { values: self.velocity_half, scale: self.kick_dt, wall_head: R::ZERO };
+        self.sweeps(backend, self.settings.divergence_tolerance, error, target, x.divergence_sum)
     }
 
     /// Corrects the step's acceleration so that the density the step ends at is rho0, to the
@@ -114,32 +124,34 @@ impl<R: Real, N: Neighbors> PressureSolve<'_, R, N> {
                 error: x.error,
             })
         };
-        self.sweeps(backend, self.settings.density_tolerance, error, self.acceleration, R::ONE, x.density_sum)
+        let target = Target { values: self.acceleration, scale: R::ONE, wall_head: self.fluid.wall_stiffness_share };
+        self.sweeps(backend, self.settings.density_tolerance, error, target, x.density_sum)
     }
 
-    /// Jacobi sweeps, warm started from a share of `stiffness_sum`: each adds `scale` times the
-    /// pressure acceleration of the stiffness change the last error pass found to `target`, at
-    /// least `min_iterations` times and until the fluid's mean error over rho0 is within
-    /// `tolerance`; `stiffness_sum` ends with what was applied.
+    /// Jacobi sweeps, warm started from a share of `stiffness_sum`: each pushes `target` with
+    /// the stiffness change the last error pass found, at least `min_iterations` times and until
+    /// the fluid's mean error over rho0 is within `tolerance`; `stiffness_sum` ends with what was
+    /// applied.
     fn sweeps<T: Topology, P: Passes<R, T, N>>(
         &self,
         backend: &mut P,
         tolerance: f64,
         error: impl Fn(&mut P),
-        target: Vec3ViewMut<'_, R>,
-        scale: R,
+        target: Target<'_, R>,
         stiffness_sum: ViewMut<'_, R>,
     ) -> SolveReport {
         let x = self.arrays;
         let rest_density = self.fluid.rest_density.to_f64();
-        let apply = |backend: &mut P| {
+        let apply = |backend: &mut P, wall_head: R| {
             backend.pressure_change(PressureChangeArgs {
                 neighborhood: self.neighborhood,
                 fluid: self.fluid,
                 id: self.id,
+                density: self.density,
                 stiffness: x.stiffness.read(),
-                scale,
-                target,
+                wall_head,
+                scale: target.scale,
+                target: target.values,
                 stiffness_sum,
             });
             self.hold_tubes(backend);
@@ -156,12 +168,12 @@ impl<R: Real, N: Neighbors> PressureSolve<'_, R, N> {
         };
         let share = R::from_f64(WARM_START_SHARE);
         backend.warm_start(WarmStartArgs { share, stiffness_sum, stiffness: x.stiffness });
-        apply(backend);
+        apply(backend, target.wall_head);
         let mut mean = mean_error(backend);
         let mut iterations = 0;
         let (min, max) = (self.settings.min_iterations, self.settings.max_iterations);
         while (mean > tolerance || iterations < min) && iterations < max {
-            apply(backend);
+            apply(backend, R::ZERO);
             mean = mean_error(backend);
             iterations += 1;
         }

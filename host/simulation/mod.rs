@@ -233,6 +233,7 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
             pressure_floor: R::from_f64(if mat.clamp_negative_pressure { 0.0 } else { f64::NEG_INFINITY }),
             wall_density_floor: R::from_f64(if mat.clamp_negative_pressure { 0.0 } else { mat.rest_density_kg_m3 }),
             pressure_pair_weight: R::from_f64(mat.pressure_gradient.pair_weight()),
+            wall_stiffness_share: R::from_f64(scene.simulation.divergence_free.wall_pressure.stiffness_share()),
             gravity: Vec3::from_f64(g),
             kernels,
             boundary_count: boundary_count as u32,

@@ -6,8 +6,10 @@ use crate::scene::Pressure;
 use crate::scene::{DensityEquation, Scene};
 use crate::simulation::backend::{ImplicitViews, PressureViews};
 use crate::simulation::particle_array::ParticleArray;
-use coil_kernels::dfsph_bender2017::ERROR_RANGE;
+use coil_kernels::cell_grid::Neighborhood;
+use coil_kernels::dfsph_bender2017::{pressure_field, ERROR_RANGE};
 use coil_kernels::fluid::Fluid;
+use coil_kernels::topology::Periodic;
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::viscosity::implicit_weiler2018::DOT_RANGE;
 use coil_kernels::Real;
@@ -275,17 +277,6 @@ impl<R: Real> Particles<R> {
         }
     }
 
-    /// Particle `i`'s pressure (Pa): Eq. (6) of its density, or, where pressure is solved,
-    /// rho^2 times the stiffness the step's two solves applied, which both push over the
-    /// step's kick.
-    pub fn pressure(&self, i: usize, fluid: &Fluid<R>) -> R {
-        let rho = self.density[i];
-        match &self.pressure_solve {
-            Some(solve) => rho * rho * (solve.stiffness_sums[0][i] + solve.stiffness_sums[1][i]),
-            None => coil_kernels::density::pressure(rho, fluid),
-        }
-    }
-
     /// Whether density carries state from step to step (the continuity equation), so that the
     /// sort reorders it.
     pub fn density_is_state(&self) -> bool {
@@ -382,7 +373,22 @@ impl<R: Real> HostParticles<R> {
     /// The neighbor grid of the particles' current order (valid after a step), with the
     /// domain's periods (none for an open domain). For output and checks; a step's own passes
     /// take the open or periodic loop by type.
-    pub fn neighborhood(&self) -> coil_kernels::cell_grid::Neighborhood<'_, coil_kernels::topology::Periodic> {
+    pub fn neighborhood(&self) -> Neighborhood<'_, Periodic> {
         self.grid.neighborhood(self.particles.position_view(), self.grid.periodic)
+    }
+
+    /// Particle `i`'s pressure (Pa): Eq. (6) of its density, or, where pressure is solved,
+    /// the field the solved pressures interpolate to there
+    /// (`coil_kernels::dfsph_bender2017::pressure_field`), read over `neighborhood`.
+    pub fn pressure(&self, i: usize, fluid: &Fluid<R>, neighborhood: &Neighborhood<'_, Periodic>) -> R {
+        let p = &self.particles;
+        match &p.pressure_solve {
+            Some(solve) => {
+                let n = p.len();
+                let sums = [View::new(&solve.stiffness_sums[0][..n]), View::new(&solve.stiffness_sums[1][..n])];
+                pressure_field(i, neighborhood, fluid, View::new(&p.id[..n]), View::new(&p.density[..n]), sums)
+            }
+            None => coil_kernels::density::pressure(p.density[i], fluid),
+        }
     }
 }

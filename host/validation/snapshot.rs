@@ -79,12 +79,13 @@ impl WithModel for Sample<'_> {
 }
 
 fn snapshot<R: Real, M: Model<R>>(sim: &Simulation<R, M>) -> Snapshot {
-    let p = sim.particles();
+    let host = sim.host();
+    let (p, neighborhood) = (&host.particles, host.neighborhood());
     let mut s = Snapshot { time_s: sim.run.time, ..Snapshot::default() };
     for i in (0..p.len()).filter(|&i| !sim.run.fluid.is_boundary(p.id[i])) {
         s.position.push([0, 1, 2].map(|a| p.position[a][i]));
         s.velocity.push([0, 1, 2].map(|a| p.velocity[a][i].to_f64()));
-        s.pressure.push(p.pressure(i, &sim.run.fluid).to_f64());
+        s.pressure.push(host.pressure(i, &sim.run.fluid, &neighborhood).to_f64());
         s.density.push(p.density[i].to_f64());
     }
     s

@@ -11,7 +11,7 @@ use super::{
     torus_implicit, torus_ordering, viscous_thread, CaseResult, HOURGLASS_CONTROL,
 };
 use crate::output::write_atomically;
-use crate::scene::{ViscosityOperator, Walls};
+use crate::scene::{Pressure, ViscosityOperator, Walls};
 use std::fmt;
 use std::path::Path;
 
@@ -150,7 +150,9 @@ fn cases(quick: bool, out: &Path) -> Vec<Case<'_>> {
         }));
     }
     let tank_layers = if quick { 10 } else { 20 };
-    cases.push(Case::new(Group::Tank, true, move || hydrostatic_tank(tank_layers, out)));
+    for pressure in [Pressure::WeaklyCompressible, Pressure::DivergenceFree] {
+        cases.push(Case::new(Group::Tank, true, move || hydrostatic_tank(tank_layers, pressure, out)));
+    }
     let vortex_across = if quick { 20 } else { 40 };
     for (op, hg) in operators {
         let binding = !paper(op) || hg > 0.0 || vortex_across >= 40;

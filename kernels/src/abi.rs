@@ -102,7 +102,7 @@ layouts!(R;
         morris_laplacian_coefficient
     }
     Fluid<R> {
-        mass, rest_density, sound_speed2, pressure_floor, wall_density_floor, pressure_pair_weight, gravity, kernels,
+        mass, rest_density, sound_speed2, pressure_floor, wall_density_floor, pressure_pair_weight, wall_stiffness_share, gravity, kernels,
         boundary_count
     }
     Newtonian<R> { nu0 }
@@ -195,8 +195,8 @@ layouts!(R;
         neighborhood, fluid, relaxation, dt, kick_dt, id, density, factor, velocity_half, acceleration, stiffness_sum,
         stiffness, error
     }
-    PressureChangeArgs<'static, R, O> { neighborhood, fluid, id, stiffness, scale, target, stiffness_sum }
-    PressureChangeArgs<'static, R, P> { neighborhood, fluid, id, stiffness, scale, target, stiffness_sum }
+    PressureChangeArgs<'static, R, O> { neighborhood, fluid, id, density, stiffness, wall_head, scale, target, stiffness_sum }
+    PressureChangeArgs<'static, R, P> { neighborhood, fluid, id, density, stiffness, wall_head, scale, target, stiffness_sum }
     WarmStartArgs<'static, R> { share, stiffness_sum, stiffness }
     ErrorSumArgs<'static, R> { fluid, id, error }
 );

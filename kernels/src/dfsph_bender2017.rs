@@ -14,12 +14,16 @@
 //! their particles lie on the fluid's lattice and take the fluid's mass, so that Akinci et
 //! al.'s boundary volumes are m / rho0.
 //!
-//! A wall particle pushes with the stiffness of the fluid particle beside it, once (s_j = 0 in
-//! the sum above), as in SPlisHSPlasH: then the pressure acceleration is the exact negative
-//! adjoint of the predicted density change and the system the sweeps solve is symmetric.
-//! Mirroring the stiffness onto the wall (s_j = s_i, Akinci et al. 2012) read the right
-//! pressure on the layer beside a wall, where this reads about twice it, but broke the
-//! symmetry: a closed channel of fluid at rest grew velocity noise from rounding to 1e-5 m/s.
+//! A wall particle pushes with the stiffness of the fluid particle beside it, as the fluid's
+//! `wall_stiffness_share` says: once (share 0, s_j = 0 in the sum above, as in SPlisHSPlasH),
+//! or mirrored (share 1, s_j = s_i, Akinci et al. 2012) with, in the density solve, the
+//! hydrostatic head between the particle and the wall added (Band et al. 2018's extrapolated
+//! boundary pressure). Pushing once, the layer on a floor reads about twice rho0 g depth;
+//! mirrored, rho0 g depth. Either way the particle's motion against a wall counts (1 + share)
+//! times in the predicted density change and the factor, so that the pressure acceleration
+//! stays the exact negative adjoint of the prediction and the system the sweeps solve is
+//! symmetric (mirrored in the force alone, a closed channel at rest grew noise from rounding).
+//! Where the fluid stops at a wall, as the solves make it, the prediction is the same.
 //!
 //! Pressure pushes and never pulls: each sweep is a projected Jacobi update, relaxed, that keeps
 //! every particle's summed stiffness at or above zero. A free surface, whose summed density
@@ -63,7 +67,8 @@ pub struct FactorArgs<'a, R, N = Neighborhood<'a, Open>> {
 /// The DFSPH factor, Eq. (8): alpha_i = rho_i / (|sum_j m_j grad W_ij|^2 + sum_{j fluid}
 /// |m_j grad W_ij|^2) (m^5/kg), which turns a density error into the stiffness that removes it
 /// where the particle's neighbors hold still. Walls count in the first sum only, since they do
-/// not move. A particle with no neighbors gets 0 and is never corrected.
+/// not move, (1 + `wall_stiffness_share`) times. A particle with no neighbors gets 0 and is
+/// never corrected.
 #[inline(always)]
 pub fn factor_pass<R: Real, N: Neighbors>(i: usize, a: &FactorArgs<R, N>) {
     let mut factor = R::ZERO;
@@ -90,8 +95,10 @@ impl<R: Real, N> GradientSum<R> for FactorSums<'_, '_, R, N> {
     #[inline(always)]
     fn add(&mut self, j: usize, grad_w: Vec3<R>) {
         let grad = grad_w * self.args.fluid.mass;
-        self.sum += grad;
-        if !self.args.fluid.is_boundary(self.args.id.at(j)) {
+        if self.args.fluid.is_boundary(self.args.id.at(j)) {
+            self.sum += grad * (R::ONE + self.args.fluid.wall_stiffness_share);
+        } else {
+            self.sum += grad;
             self.squares += grad.dot(grad);
         }
     }
@@ -126,8 +133,11 @@ impl<R: Real> VelocityField<R> for Kicked<'_, R> {
     }
 }
 
-/// The sums of [`density_change`]: sum_j (v_i - v_j) . grad W_ij, and the neighbors besides i.
-struct DensityChange<V, R> {
+/// The sums of [`density_change`]: sum_j (v_i - v_j) . grad W_ij, a wall's (1 + the wall
+/// stiffness share) times, and the neighbors besides i.
+struct DensityChange<'a, V, R> {
+    fluid: &'a Fluid<R>,
+    id: View<'a, u32>,
     velocity: V,
     i: usize,
     v_i: Vec3<R>,
@@ -135,26 +145,30 @@ struct DensityChange<V, R> {
     neighbors: u32,
 }
 
-impl<R: Real, V: VelocityField<R>> GradientSum<R> for DensityChange<V, R> {
+impl<R: Real, V: VelocityField<R>> GradientSum<R> for DensityChange<'_, V, R> {
     #[inline(always)]
     fn add(&mut self, j: usize, grad_w: Vec3<R>) {
-        self.change += (self.v_i - self.velocity.at(j)).dot(grad_w);
+        let change = (self.v_i - self.velocity.at(j)).dot(grad_w);
+        self.change +=
+            if self.fluid.is_boundary(self.id.at(j)) { change * (R::ONE + self.fluid.wall_stiffness_share) } else { change };
         self.neighbors += (j != self.i) as u32;
     }
 }
 
-/// dt sum_j m_j (v_i - v_j) . grad W_ij (kg/m^3): the density change over dt that velocity
-/// `velocity` makes at particle `i`, and how many neighbors it has besides itself.
+/// dt sum_j m_j (v_i - v_j) . grad W_ij (kg/m^3), a wall's term (1 + the wall stiffness
+/// share) times (see the module's walls): the density change over dt that velocity `velocity` makes at particle `i`, and how
+/// many neighbors it has besides itself.
 #[inline(always)]
 fn density_change<R: Real, N: Neighbors, V: VelocityField<R>>(
     i: usize,
     neighborhood: &N,
     fluid: &Fluid<R>,
+    id: View<u32>,
     dt: R,
     velocity: V,
 ) -> (R, u32) {
     let v_i = velocity.at(i);
-    let mut sums = DensityChange { velocity, i, v_i, change: R::ZERO, neighbors: 0 };
+    let mut sums = DensityChange { fluid, id, velocity, i, v_i, change: R::ZERO, neighbors: 0 };
     neighborhood.sum_spiky_gradients(i, &fluid.kernels, &mut sums);
     (sums.change * fluid.mass * dt, sums.neighbors)
 }
@@ -222,7 +236,7 @@ pub fn divergence_error_pass<R: Real, N: Neighbors>(i: usize, a: &DivergenceErro
     let (mut error, mut s) = (R::ZERO, R::ZERO);
     let factor = a.factor.at(i);
     if factor > R::ZERO {
-        let (change, neighbors) = density_change(i, &a.neighborhood, &a.fluid, a.dt, HalfStep(a.velocity_half));
+        let (change, neighbors) = density_change(i, &a.neighborhood, &a.fluid, a.id, a.dt, HalfStep(a.velocity_half));
         let applied = a.stiffness_sum.at(i);
         (error, s) = if neighbors < DIVERGENCE_NEIGHBORS {
             (R::ZERO, -applied)
@@ -274,7 +288,7 @@ pub fn density_error_pass<R: Real, N: Neighbors>(i: usize, a: &DensityErrorArgs<
     if factor > R::ZERO {
         let velocity = Kicked { velocity_half: a.velocity_half, acceleration: a.acceleration, kick_dt: a.kick_dt };
         let rho = a.density.at(i);
-        let excess = rho + density_change(i, &a.neighborhood, &a.fluid, a.dt, velocity).0 - a.fluid.rest_density;
+        let excess = rho + density_change(i, &a.neighborhood, &a.fluid, a.id, a.dt, velocity).0 - a.fluid.rest_density;
         (error, s) = projected(excess, factor, rho, a.dt, a.kick_dt, a.relaxation, a.stiffness_sum.at(i));
     }
     // SAFETY: invocation i owns entry i of both outputs.
@@ -291,7 +305,11 @@ pub struct PressureChangeArgs<'a, R, N = Neighborhood<'a, Open>> {
     pub neighborhood: N,
     pub fluid: Fluid<R>,
     pub id: View<'a, u32>,
+    pub density: View<'a, R>,
     pub stiffness: View<'a, R>,
+    /// Times the walls' hydrostatic head that this application adds: the fluid's
+    /// `wall_stiffness_share` once per density solve, 0 otherwise.
+    pub wall_head: R,
     /// Times the pressure acceleration added to `target`: the kick (s) where it is a velocity,
     /// 1 where it is an acceleration.
     pub scale: R,
@@ -302,38 +320,30 @@ pub struct PressureChangeArgs<'a, R, N = Neighborhood<'a, Open>> {
 }
 
 /// Adds `scale` times the pressure acceleration of Eq. (7) in stiffness form,
-/// -sum_j m_j (s_i + s_j) grad W_ij (m/s^2), with s_j = 0 for a wall, to fluid particle
-/// `i`'s entry of `target`.
+/// -sum_j m_j (s_i + s_j) grad W_ij (m/s^2), to fluid particle `i`'s entry of `target`. A
+/// wall's stiffness is the fluid's `wall_stiffness_share` of the particle's own, plus
+/// `wall_head` times the hydrostatic head between them, rho0 g . (x_j - x_i) / rho_i^2.
 #[inline(always)]
 pub fn pressure_change_pass<R: Real, N: Neighbors>(i: usize, a: &PressureChangeArgs<R, N>) {
     if a.fluid.is_boundary(a.id.at(i)) {
         return;
     }
     let s_i = a.stiffness.at(i);
-    let mut sum = PressureSum { args: a, s_i, acceleration: Vec3::zero() };
-    a.neighborhood.sum_spiky_gradients(i, &a.fluid.kernels, &mut sum);
-    let change = sum.acceleration * (a.fluid.mass * a.scale);
+    let rho_i = a.density.at(i);
+    let s_wall = a.fluid.wall_stiffness_share * s_i;
+    let head = a.fluid.gravity * (a.wall_head * a.fluid.rest_density / (rho_i * rho_i));
+    let mut acceleration = Vec3::zero();
+    a.neighborhood.for_each_neighbor(i, a.fluid.kernels.h2, |j, r_ij, r2| {
+        let grad_w = a.fluid.kernels.spiky_gradient(r_ij, r2);
+        let s_j = if a.fluid.is_boundary(a.id.at(j)) { s_wall - head.dot(r_ij) } else { a.stiffness.at(j) };
+        acceleration = acceleration - grad_w * (s_i + s_j);
+    });
+    let change = acceleration * (a.fluid.mass * a.scale);
     let t = vec3(a.target.at(i)) + change;
     // SAFETY: invocation i owns entry i of both outputs.
     unsafe {
         a.target.write(i, [t.x, t.y, t.z]);
         a.stiffness_sum.write(i, a.stiffness_sum.at(i) + s_i);
-    }
-}
-
-/// The sum of [`pressure_change_pass`]: -sum_j (s_i + s_j) grad W_ij.
-struct PressureSum<'s, 'a, R, N> {
-    args: &'s PressureChangeArgs<'a, R, N>,
-    s_i: R,
-    acceleration: Vec3<R>,
-}
-
-impl<R: Real, N> GradientSum<R> for PressureSum<'_, '_, R, N> {
-    #[inline(always)]
-    fn add(&mut self, j: usize, grad_w: Vec3<R>) {
-        let a = self.args;
-        let s_j = if a.fluid.is_boundary(a.id.at(j)) { R::ZERO } else { a.stiffness.at(j) };
-        self.acceleration = self.acceleration - grad_w * (self.s_i + s_j);
     }
 }
 
@@ -386,4 +396,50 @@ pub fn error_sum_pass<R: Real>(r: usize, n: usize, a: &ErrorSumArgs<R>, out: Vie
     }
     // SAFETY: invocation r owns entry r.
     unsafe { out.write(r, sums) };
+}
+
+/// The pressure of fluid particle `i` in a solved run (Pa), as frames and validation read it:
+/// the SPH interpolant sum_j V_j p_j W_ij / sum_j V_j W_ij (poly6, V_j = m / rho_j) of the
+/// solved pressures p_j = rho_j^2 (s_j summed over both solves). Walls that mirror the
+/// stiffness take part with the pressure the density solve gives them, the particle's own plus
+/// the hydrostatic head; walls that push with it once carry none of their own and are left out.
+/// On a lattice the symmetric pressure gradient cannot see a pressure that alternates layer by
+/// layer, so the solved values carry such a mode wherever a free surface pins one set of
+/// layers (a resting tank 10 layers deep: 0.05 of rho0 g D); the interpolant averages it out
+/// as the gradient does.
+#[inline(always)]
+pub fn pressure_field<R: Real, N: Neighbors>(
+    i: usize,
+    neighborhood: &N,
+    fluid: &Fluid<R>,
+    id: View<u32>,
+    density: View<R>,
+    stiffness_sums: [View<R>; 2],
+) -> R {
+    let solved = |j: usize| {
+        let rho = density.at(j);
+        rho * rho * (stiffness_sums[0].at(j) + stiffness_sums[1].at(j))
+    };
+    let p_i = solved(i);
+    let mirrored = fluid.wall_stiffness_share > R::ZERO;
+    let head = fluid.gravity * fluid.rest_density;
+    let wall_volume = fluid.mass / fluid.rest_density;
+    let (mut weighted, mut weights) = (R::ZERO, R::ZERO);
+    neighborhood.for_each_neighbor(i, fluid.kernels.h2, |j, r_ij, r2| {
+        let (p_j, volume) = if !fluid.is_boundary(id.at(j)) {
+            (solved(j), fluid.mass / density.at(j))
+        } else if mirrored {
+            (p_i * fluid.wall_stiffness_share - head.dot(r_ij), wall_volume)
+        } else {
+            return;
+        };
+        let w = fluid.kernels.poly6(r2) * volume;
+        weighted += w * p_j;
+        weights += w;
+    });
+    if weights > R::ZERO {
+        (weighted / weights).max(R::ZERO)
+    } else {
+        p_i
+    }
 }

@@ -29,6 +29,10 @@ pub struct Fluid<R> {
     /// (Müller 2003's mean), which is half the gradient of a linear pressure field, so that the
     /// fluid compresses as if c were c / sqrt(2); 1 gives the full gradient.
     pub pressure_pair_weight: R,
+    /// Where pressure is solved, the share of a fluid particle's stiffness that a wall
+    /// particle beside it pushes back with on top of the particle's own: 0 (once) or 1
+    /// (mirrored; `dfsph_bender2017`).
+    pub wall_stiffness_share: R,
     /// Gravity g (m/s^2).
     pub gravity: Vec3<R>,
     pub kernels: SmoothingKernels<R>,
