@@ -6,7 +6,8 @@
 use super::scene_word;
 use super::snapshot::snapshots;
 use crate::scene::{
-    DensityKernelKind, Precision, Pressure, Scene, VelocityGradient, ViscosityOperator, ViscositySolver, ViscousVelocity, Walls,
+    DensityKernelKind, Precision, Pressure, Scene, VelocityGradient, ViscosityOperator, ViscositySolver, ViscousVelocity,
+    WallPressure, Walls,
 };
 use std::f64::consts::PI;
 
@@ -46,6 +47,8 @@ pub struct Channel {
     pub implicit_tolerance: f64,
     /// Eq. (6)'s pressure, or pressure solved (at the CFL time step, on the paper's walls).
     pub pressure: Pressure,
+    /// What the walls push with where pressure is solved.
+    pub wall_pressure: WallPressure,
 }
 
 /// The Cross model, Eq. (3), by its constants.
@@ -86,6 +89,7 @@ impl Channel {
             fixed_dt_s: None,
             implicit_tolerance: 1e-3,
             pressure: Pressure::WeaklyCompressible,
+            wall_pressure: WallPressure::Once,
         }
     }
 
@@ -113,7 +117,7 @@ impl Channel {
         let (operator, precision, walls) = (scene_word(self.operator), scene_word(self.precision), scene_word(self.walls));
         let (density_kernel, viscous_velocity) = (scene_word(self.density_kernel), scene_word(self.viscous_velocity));
         let (velocity_gradient, solver) = (scene_word(self.velocity_gradient), scene_word(self.solver));
-        let pressure = scene_word(self.pressure);
+        let (pressure, wall_pressure) = (scene_word(self.pressure), scene_word(self.wall_pressure));
         let fixed = self.fixed_dt_s.map(|dt| format!(", fixed_s = {dt:e}")).unwrap_or_default();
         let cross = self
             .cross
@@ -147,6 +151,7 @@ precision = "{precision}"
 walls = "{walls}"
 pressure = "{pressure}"
 time_step = {{ safety_factor = {sf:e}, allow_above_stability_bound = {above}, viscous_velocity = "{viscous_velocity}"{fixed} }}
+divergence_free = {{ wall_pressure = "{wall_pressure}" }}
 [[boundary]]
 shape = "box"
 min_m = [0.0, 0.0, 0.0]
