@@ -25,7 +25,8 @@ pub struct Frame {
     /// Shear rate D (1/s), Eq. (2)
     pub shear_rate: Vec<f32>,
     pub id: Vec<u32>,
-    all_shear_rate: Vec<f32>,
+    /// Each particle's shear rate and pressure, which take neighbor loops, in index order.
+    all_shear_rate: Vec<[f32; 2]>,
     bytes: Vec<u8>,
 }
 
@@ -39,14 +40,15 @@ impl Frame {
         let neighborhood = host.neighborhood();
         let velocity = vec3_view(&p.velocity, n);
         let density = View::new(&p.density[..n]);
-        self.all_shear_rate.resize(n, 0.0);
+        self.all_shear_rate.resize(n, [0.0; 2]);
         self.all_shear_rate.par_iter_mut().enumerate().with_min_len(256).for_each(|(i, out)| {
             // Boundary particles are not written; their neighbor loops would be wasted.
             if fluid.is_boundary(p.id[i]) {
                 return;
             }
             let grad = M::Gradient::velocity_gradient(i, &neighborhood, &velocity, &density, &fluid);
-            *out = shear_rate(rate_of_deformation(grad)).to_f64() as f32;
+            let pressure = host.pressure(i, &fluid, &neighborhood);
+            *out = [shear_rate(rate_of_deformation(grad)).to_f64() as f32, pressure.to_f64() as f32];
         });
         self.position.clear();
         self.velocity.clear();
@@ -60,11 +62,11 @@ impl Frame {
                 continue;
             }
             let rho = p.density[i];
-            let d = self.all_shear_rate[i];
+            let [d, pressure] = self.all_shear_rate[i];
             self.position.push([0, 1, 2].map(|a| p.position[a][i]));
             self.velocity.push([0, 1, 2].map(|a| p.velocity[a][i].to_f64() as f32));
             self.density.push(rho.to_f64() as f32);
-            self.pressure.push(host.pressure(i, &fluid, &neighborhood).to_f64() as f32);
+            self.pressure.push(pressure);
             self.viscosity.push(run.model.law().viscosity(R::from_f64(d as f64)).to_f64() as f32);
             self.shear_rate.push(d);
             self.id.push(p.id[i]);

@@ -133,14 +133,16 @@ impl<R: Real> VelocityField<R> for Kicked<'_, R> {
     }
 }
 
-/// The sums of [`density_change`]: sum_j (v_i - v_j) . grad W_ij, a wall's (1 + the wall
-/// stiffness share) times, and the neighbors besides i.
+/// The sums of [`density_change`]: sum_j (v_i - v_j) . grad W_ij, a wall's `wall_weight`
+/// times, and the neighbors besides i.
 struct DensityChange<'a, V, R> {
-    fluid: &'a Fluid<R>,
-    id: View<'a, u32>,
     velocity: V,
     i: usize,
     v_i: Vec3<R>,
+    /// 1 + the fluid's wall stiffness share.
+    wall_weight: R,
+    id: View<'a, u32>,
+    boundary_count: u32,
     change: R,
     neighbors: u32,
 }
@@ -149,15 +151,16 @@ impl<R: Real, V: VelocityField<R>> GradientSum<R> for DensityChange<'_, V, R> {
     #[inline(always)]
     fn add(&mut self, j: usize, grad_w: Vec3<R>) {
         let change = (self.v_i - self.velocity.at(j)).dot(grad_w);
-        self.change +=
-            if self.fluid.is_boundary(self.id.at(j)) { change * (R::ONE + self.fluid.wall_stiffness_share) } else { change };
+        // Walls pushing once weigh as the fluid does, and no id need be read.
+        let wall = self.wall_weight > R::ONE && self.id.at(j) < self.boundary_count;
+        self.change += if wall { change * self.wall_weight } else { change };
         self.neighbors += (j != self.i) as u32;
     }
 }
 
 /// dt sum_j m_j (v_i - v_j) . grad W_ij (kg/m^3), a wall's term (1 + the wall stiffness
-/// share) times (see the module's walls): the density change over dt that velocity `velocity` makes at particle `i`, and how
-/// many neighbors it has besides itself.
+/// share) times (see the module's walls): the density change over dt that velocity
+/// `velocity` makes at particle `i`, and how many neighbors it has besides itself.
 #[inline(always)]
 fn density_change<R: Real, N: Neighbors, V: VelocityField<R>>(
     i: usize,
@@ -168,7 +171,16 @@ fn density_change<R: Real, N: Neighbors, V: VelocityField<R>>(
     velocity: V,
 ) -> (R, u32) {
     let v_i = velocity.at(i);
-    let mut sums = DensityChange { fluid, id, velocity, i, v_i, change: R::ZERO, neighbors: 0 };
+    let mut sums = DensityChange {
+        velocity,
+        i,
+        v_i,
+        wall_weight: R::ONE + fluid.wall_stiffness_share,
+        id,
+        boundary_count: fluid.boundary_count,
+        change: R::ZERO,
+        neighbors: 0,
+    };
     neighborhood.sum_spiky_gradients(i, &fluid.kernels, &mut sums);
     (sums.change * fluid.mass * dt, sums.neighbors)
 }
@@ -329,8 +341,8 @@ pub fn pressure_change_pass<R: Real, N: Neighbors>(i: usize, a: &PressureChangeA
         return;
     }
     let s_i = a.stiffness.at(i);
-    let rho_i = a.density.at(i);
     let s_wall = a.fluid.wall_stiffness_share * s_i;
+    let rho_i = a.density.at(i);
     let head = a.fluid.gravity * (a.wall_head * a.fluid.rest_density / (rho_i * rho_i));
     let mut acceleration = Vec3::zero();
     a.neighborhood.for_each_neighbor(i, a.fluid.kernels.h2, |j, r_ij, r2| {
