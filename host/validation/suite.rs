@@ -284,6 +284,8 @@ mod tests {
         assert_eq!(binding(Group::Thread, false), full);
         // The torus: its ordering, and the implicit solver against the explicit.
         assert_eq!(binding(Group::Torus, true), [true, true]);
-        assert_eq!(cases(true, out).len(), 12 + 12 + 1 + 5 + 2 + 7 + 13);
+        // The tank, with Eq. (6)'s pressure and solved, binds both ways.
+        assert_eq!(binding(Group::Tank, true), [true, true]);
+        assert_eq!(cases(true, out).len(), 12 + 12 + 2 + 5 + 2 + 7 + 13);
     }
 }
