@@ -342,20 +342,44 @@ pub fn pressure_change_pass<R: Real, N: Neighbors>(i: usize, a: &PressureChangeA
     }
     let s_i = a.stiffness.at(i);
     let s_wall = a.fluid.wall_stiffness_share * s_i;
-    let rho_i = a.density.at(i);
-    let head = a.fluid.gravity * (a.wall_head * a.fluid.rest_density / (rho_i * rho_i));
-    let mut acceleration = Vec3::zero();
-    a.neighborhood.for_each_neighbor(i, a.fluid.kernels.h2, |j, r_ij, r2| {
-        let grad_w = a.fluid.kernels.spiky_gradient(r_ij, r2);
-        let s_j = if a.fluid.is_boundary(a.id.at(j)) { s_wall - head.dot(r_ij) } else { a.stiffness.at(j) };
-        acceleration = acceleration - grad_w * (s_i + s_j);
-    });
+    let mut sum = PressureSum { args: a, s_i, s_wall, acceleration: Vec3::zero() };
+    a.neighborhood.sum_spiky_gradients(i, &a.fluid.kernels, &mut sum);
+    let mut acceleration = sum.acceleration;
+    if a.wall_head > R::ZERO {
+        // Apart from the sum above, which the sweeps run without a head: there the wall term
+        // needs no separation and the loop stays as lean as the fluid's.
+        let rho_i = a.density.at(i);
+        let head = a.fluid.gravity * (a.wall_head * a.fluid.rest_density / (rho_i * rho_i));
+        a.neighborhood.for_each_neighbor(i, a.fluid.kernels.h2, |j, r_ij, r2| {
+            if a.fluid.is_boundary(a.id.at(j)) {
+                acceleration += a.fluid.kernels.spiky_gradient(r_ij, r2) * head.dot(r_ij);
+            }
+        });
+    }
     let change = acceleration * (a.fluid.mass * a.scale);
     let t = vec3(a.target.at(i)) + change;
     // SAFETY: invocation i owns entry i of both outputs.
     unsafe {
         a.target.write(i, [t.x, t.y, t.z]);
         a.stiffness_sum.write(i, a.stiffness_sum.at(i) + s_i);
+    }
+}
+
+/// The sum of [`pressure_change_pass`] without the walls' head: -sum_j (s_i + s_j) grad W_ij.
+struct PressureSum<'s, 'a, R, N> {
+    args: &'s PressureChangeArgs<'a, R, N>,
+    s_i: R,
+    /// A wall's stiffness.
+    s_wall: R,
+    acceleration: Vec3<R>,
+}
+
+impl<R: Real, N> GradientSum<R> for PressureSum<'_, '_, R, N> {
+    #[inline(always)]
+    fn add(&mut self, j: usize, grad_w: Vec3<R>) {
+        let a = self.args;
+        let s_j = if a.fluid.is_boundary(a.id.at(j)) { self.s_wall } else { a.stiffness.at(j) };
+        self.acceleration = self.acceleration - grad_w * (self.s_i + s_j);
     }
 }
 
