@@ -26,7 +26,7 @@ pub struct Frame {
     pub shear_rate: Vec<f32>,
     pub id: Vec<u32>,
     /// Each particle's shear rate and pressure, which take neighbor loops, in index order.
-    all_shear_rate: Vec<[f32; 2]>,
+    shear_rate_and_pressure: Vec<[f32; 2]>,
     bytes: Vec<u8>,
 }
 
@@ -40,8 +40,8 @@ impl Frame {
         let neighborhood = host.neighborhood();
         let velocity = vec3_view(&p.velocity, n);
         let density = View::new(&p.density[..n]);
-        self.all_shear_rate.resize(n, [0.0; 2]);
-        self.all_shear_rate.par_iter_mut().enumerate().with_min_len(256).for_each(|(i, out)| {
+        self.shear_rate_and_pressure.resize(n, [0.0; 2]);
+        self.shear_rate_and_pressure.par_iter_mut().enumerate().with_min_len(256).for_each(|(i, out)| {
             // Boundary particles are not written; their neighbor loops would be wasted.
             if fluid.is_boundary(p.id[i]) {
                 return;
@@ -62,7 +62,7 @@ impl Frame {
                 continue;
             }
             let rho = p.density[i];
-            let [d, pressure] = self.all_shear_rate[i];
+            let [d, pressure] = self.shear_rate_and_pressure[i];
             self.position.push([0, 1, 2].map(|a| p.position[a][i]));
             self.velocity.push([0, 1, 2].map(|a| p.velocity[a][i].to_f64() as f32));
             self.density.push(rho.to_f64() as f32);

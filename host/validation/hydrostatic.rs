@@ -75,9 +75,9 @@ impl Tank {
         [0.0, -GRAVITY * ramp, 0.0]
     }
 
-    /// The scene: mirrored walls (where pressure is solved, the paper's mirroring it), negative pressure
-    /// clamped (the free surface is at p = 0), and a viscosity at which Eq. (10)'s viscous and
-    /// acoustic terms are equal, to damp what the ramp leaves.
+    /// The scene: mirrored walls (where pressure is solved, the paper's mirroring it),
+    /// negative pressure clamped (the free surface is at p = 0), and a viscosity at which
+    /// Eq. (10)'s viscous and acoustic terms are equal, to damp what the ramp leaves.
     pub fn scene(&self) -> Scene {
         let s = self.spacing();
         let (d, c) = (self.depth_m, self.sound_speed());
