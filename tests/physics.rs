@@ -453,3 +453,54 @@ fn stress_divergence_reads_the_stress_it_is_given() {
     eprintln!("Eq. (9) on a linear stress: worst error {worst:.2e} of |div tau| / rho0 = {scale:.3} m/s^2");
     assert!(worst < 1e-9, "Eq. (9) misses div tau / rho0 by {worst:.3e} of it");
 }
+
+/// Chebyshev's weights reach the density solve's tolerance in fewer sweeps and leave the same
+/// flow. In a pool 40 layers deep whose gravity starts at once, solved to a mean density error
+/// of 1e-5, the pressure must reach the floor through every layer, which plain sweeps do slowly
+/// (33 a step over the first 30 steps); weighted (radius 0.9), 15. Every solve converges, and
+/// the two runs' velocities then differ by 0.0014 of g t (the top layer, with too few
+/// neighbors to be pushed, settles at about g t): the bound is 0.01.
+#[test]
+fn chebyshev_weights_solve_a_deep_pool_in_fewer_sweeps_to_the_same_flow() {
+    const STEPS: usize = 30;
+    let run = |radius: f64| {
+        let text = common::set(
+            &common::box_scene(0.01, [0.1, 0.5, 0.1], [0.1, 0.4, 0.1], ""),
+            &[
+                GRAVITY,
+                "simulation.pressure=\"divergence_free\"",
+                "material.density_kernel=\"spiky\"",
+                "simulation.divergence_free.density_tolerance=1e-5",
+                &format!("simulation.divergence_free.chebyshev_radius={radius}"),
+            ],
+        );
+        let mut sim = simulation(&text, LaplacianModel(Newtonian { nu0: 0.01 }));
+        for _ in 0..STEPS {
+            sim.step().map_err(|e| e.instability()).expect("stable");
+        }
+        let p = sim.particles();
+        let mut velocity: Vec<(u32, [f64; 3])> = (0..p.len()).map(|i| (p.id[i], [0, 1, 2].map(|a| p.velocity[a][i]))).collect();
+        velocity.sort_by_key(|&(id, _)| id);
+        (sim.run.density_solves, velocity, sim.run.time)
+    };
+    let (plain, plain_velocity, time) = run(0.0);
+    let (weighted, weighted_velocity, weighted_time) = run(0.9);
+    assert_eq!(time, weighted_time, "the same steps");
+    let difference = plain_velocity
+        .iter()
+        .zip(&weighted_velocity)
+        .map(|((a, u), (b, v))| {
+            assert_eq!(a, b);
+            (0..3).map(|k| (u[k] - v[k]).powi(2)).sum::<f64>().sqrt()
+        })
+        .fold(0.0, f64::max)
+        / (9.8 * time);
+    eprintln!(
+        "density sweeps a step: plain {:.2}, weighted {:.2}; largest velocity difference {difference:.2e} of g t",
+        plain.mean_iterations(),
+        weighted.mean_iterations()
+    );
+    assert_eq!(plain.unconverged + weighted.unconverged, 0);
+    assert!(weighted.mean_iterations() <= 0.6 * plain.mean_iterations());
+    assert!(difference < 0.01, "{difference}");
+}

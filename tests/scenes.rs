@@ -118,6 +118,8 @@ fn bad_scenes_exit_2_naming_file_and_field() {
         (&["material.density_kernel=poly6"], "material.density_kernel"),
         (&["simulation.divergence_free.relaxation=1.0"], "simulation.divergence_free.relaxation"),
         (&["simulation.divergence_free.relaxation=0"], "simulation.divergence_free.relaxation"),
+        (&["simulation.divergence_free.chebyshev_radius=1"], "simulation.divergence_free.chebyshev_radius"),
+        (&["simulation.divergence_free.chebyshev_radius=-0.5"], "simulation.divergence_free.chebyshev_radius"),
         (&["simulation.divergence_free.min_iterations=101"], "simulation.divergence_free.min_iterations"),
         (&["simulation.divergence_free.density_tolerance=0.5"], "simulation.divergence_free.density_tolerance"),
         (&["simulation.divergence_free.cfl_factor=1.5"], "simulation.divergence_free.cfl_factor"),
@@ -418,7 +420,8 @@ fn check_reports_counts_the_equation_10_bound_and_a_calibrated_estimate() {
     assert!((r.dt_s - 2e-4).abs() < 1e-15 && r.limit == Limit::Acoustic, "{r}");
     assert_eq!(r.steps, (dam.simulation.end_time_s / 2e-4).ceil());
     assert_eq!(r.particle_steps, r.steps * (8000 + r.boundary) as f64);
-    assert!(r.seconds_per_particle_step > 0.0 && r.calibration_steps >= 5);
+    // At least two steps whatever the machine's load; how many fit in the 200 ms depends on it.
+    assert!(r.seconds_per_particle_step > 0.0 && r.calibration_steps >= 2);
     assert!((r.estimated_wall_s - r.particle_steps * r.seconds_per_particle_step).abs() < 1e-9);
 
     // The jet: no fluid at t = 0; the inlet delivers rho0 A U / m particles per second.

@@ -405,6 +405,15 @@ impl Check<'_> {
             (0.0, 0.75),
             "dimensionless, above 0 and at most 0.75 (Jacobi sweeps diverge above 0.755)",
         )?;
+        if !(0.0..1.0).contains(&d.chebyshev_radius) {
+            return self.fail(
+                "simulation.divergence_free.chebyshev_radius",
+                format!(
+                    "must be at least 0 and below 1 (a spectral radius; 0 sweeps plain Jacobi), got {}",
+                    short(d.chebyshev_radius)
+                ),
+            );
+        }
         self.positive("simulation.divergence_free.cfl_factor", d.cfl_factor)?;
         self.within("simulation.divergence_free.cfl_factor", d.cfl_factor, (0.0, 1.0), "dimensionless, above 0 and at most 1")?;
         self.positive("simulation.divergence_free.max_time_step_s", d.max_time_step_s)

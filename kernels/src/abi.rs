@@ -15,7 +15,7 @@ use crate::counting_sort::{Counters, Gathered, ReorderArgs};
 use crate::cross_viscosity::{Cross, Newtonian};
 use crate::density::DensityArgs;
 use crate::dfsph_bender2017::{
-    DensityErrorArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, WarmStartArgs,
+    DensityErrorArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, Sweep, WarmStartArgs,
 };
 use crate::diagnostics::{DiagnosticsArgs, StateFigures};
 use crate::fluid::Fluid;
@@ -105,6 +105,7 @@ layouts!(R;
         mass, rest_density, sound_speed2, pressure_floor, wall_density_floor, pressure_pair_weight, wall_stiffness_share, gravity, kernels,
         boundary_count
     }
+    Sweep<R> { relaxation, momentum }
     Newtonian<R> { nu0 }
     Cross<R> { nu0, nu_inf, k, n }
     NozzleTube<R> { exit, axis, across, half_extent, round, length, velocity }
@@ -182,17 +183,17 @@ layouts!(R;
     FactorArgs<'static, R, O> { neighborhood, fluid, id, density, factor }
     FactorArgs<'static, R, P> { neighborhood, fluid, id, density, factor }
     DivergenceErrorArgs<'static, R, O> {
-        neighborhood, fluid, relaxation, dt, kick_dt, id, density, factor, velocity_half, stiffness_sum, stiffness, error
+        neighborhood, fluid, sweep, dt, kick_dt, id, density, factor, velocity_half, stiffness_sum, stiffness, error
     }
     DivergenceErrorArgs<'static, R, P> {
-        neighborhood, fluid, relaxation, dt, kick_dt, id, density, factor, velocity_half, stiffness_sum, stiffness, error
+        neighborhood, fluid, sweep, dt, kick_dt, id, density, factor, velocity_half, stiffness_sum, stiffness, error
     }
     DensityErrorArgs<'static, R, O> {
-        neighborhood, fluid, relaxation, dt, kick_dt, id, density, factor, velocity_half, acceleration, stiffness_sum,
+        neighborhood, fluid, sweep, dt, kick_dt, id, density, factor, velocity_half, acceleration, stiffness_sum,
         stiffness, error
     }
     DensityErrorArgs<'static, R, P> {
-        neighborhood, fluid, relaxation, dt, kick_dt, id, density, factor, velocity_half, acceleration, stiffness_sum,
+        neighborhood, fluid, sweep, dt, kick_dt, id, density, factor, velocity_half, acceleration, stiffness_sum,
         stiffness, error
     }
     PressureChangeArgs<'static, R, O> { neighborhood, fluid, id, density, stiffness, wall_head, scale, target, stiffness_sum }

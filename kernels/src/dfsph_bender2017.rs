@@ -28,7 +28,9 @@
 //! Pressure pushes and never pulls: each sweep is a projected Jacobi update, relaxed, that keeps
 //! every particle's summed stiffness at or above zero. A free surface, whose summed density
 //! falls short of rho0, is never pulled back together, and a dilating flow is left alone; a
-//! particle that an earlier update over-expanded sheds its stiffness.
+//! particle that an earlier update over-expanded sheds its stiffness. A sweep may also repeat a
+//! share of the last sweep's change ([`Sweep`]): Chebyshev's weights, which the host picks, let
+//! the long pressure waves of a deep pool converge in fewer sweeps.
 //!
 //! The passes of one step, in order: [`factor_pass`]; on the half-step velocity
 //! [`warm_start_pass`] and [`pressure_change_pass`], then per sweep [`divergence_error_pass`],
@@ -199,18 +201,31 @@ fn stiffness<R: Real>(error: R, factor: R, density: R, dt: R, kick_dt: R) -> R {
 }
 
 /// One projected Jacobi update of a particle whose density would change by `excess` (kg/m^3)
-/// over the step and whose stiffness applied so far is `applied`: the relaxed stiffness change
-/// that removes the excess, held so that the particle's stiffness stays at or above zero
-/// (pressure pushes, never pulls), and the part of the excess that violates the constraint
-/// (kg/m^3): a compression, or an expansion where the particle still pushes.
+/// over the step, which stiffness `removing` would remove, whose stiffness applied so far is
+/// `applied` and whose last sweep changed it by `last`: the stiffness change `sweep` makes of
+/// them, held so that the particle's stiffness stays at or above zero (pressure pushes, never
+/// pulls), and the part of the excess that violates the constraint (kg/m^3): a compression, or
+/// an expansion where the particle still pushes.
 ///
 /// Projection rather than a clamped error is what lets a warm start work: a particle that the
 /// last step's stiffness now over-expands sheds it instead of keeping it.
 #[inline(always)]
-fn projected<R: Real>(excess: R, factor: R, density: R, dt: R, kick_dt: R, relaxation: R, applied: R) -> (R, R) {
-    let change = (relaxation * stiffness(excess, factor, density, dt, kick_dt)).max(-applied);
+fn projected<R: Real>(excess: R, removing: R, sweep: Sweep<R>, last: R, applied: R) -> (R, R) {
+    let change = (sweep.relaxation * removing + sweep.momentum * last).max(-applied);
     let violation = if excess > R::ZERO || applied > R::ZERO { excess.abs() } else { R::ZERO };
     (violation, change)
+}
+
+/// How a sweep updates the stiffness: `relaxation` times the Jacobi update plus `momentum`
+/// times the change the last sweep applied; Chebyshev's semi-iteration (Wang 2015) with weight
+/// omega takes omega times the plain relaxation and a momentum of omega - 1.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct Sweep<R> {
+    /// The share of the stiffness that removes the error which a sweep applies (above 0).
+    pub relaxation: R,
+    /// The share of the last sweep's stiffness change that this sweep repeats (0 to 1).
+    pub momentum: R,
 }
 
 /// Arguments of [`divergence_error_pass`].
@@ -219,8 +234,8 @@ fn projected<R: Real>(excess: R, factor: R, density: R, dt: R, kick_dt: R, relax
 pub struct DivergenceErrorArgs<'a, R, N = Neighborhood<'a, Open>> {
     pub neighborhood: N,
     pub fluid: Fluid<R>,
-    /// The share of the stiffness that removes the error which a sweep applies (0 to 1).
-    pub relaxation: R,
+    /// How the sweep updates the stiffness.
+    pub sweep: Sweep<R>,
     /// The step's drift (s).
     pub dt: R,
     /// The step's kick (s), over which a stiffness acts.
@@ -232,7 +247,8 @@ pub struct DivergenceErrorArgs<'a, R, N = Neighborhood<'a, Open>> {
     pub velocity_half: Vec3View<'a, R>,
     /// The stiffness applied so far in this solve (m^5/(kg s^2)).
     pub stiffness_sum: View<'a, R>,
-    /// The change of s_i this sweep applies (m^5/(kg s^2)); 0 for walls.
+    /// In, the change of s_i the last sweep applied; out, the change this sweep applies
+    /// (m^5/(kg s^2)); 0 for walls.
     pub stiffness: ViewMut<'a, R>,
     /// The part of dt D rho_i / Dt that violates the constraint (kg/m^3): a compression, or an
     /// expansion where the particle still pushes; 0 for walls.
@@ -253,7 +269,8 @@ pub fn divergence_error_pass<R: Real, N: Neighbors>(i: usize, a: &DivergenceErro
         (error, s) = if neighbors < DIVERGENCE_NEIGHBORS {
             (R::ZERO, -applied)
         } else {
-            projected(change, factor, a.density.at(i), a.dt, a.kick_dt, a.relaxation, applied)
+            let removing = stiffness(change, factor, a.density.at(i), a.dt, a.kick_dt);
+            projected(change, removing, a.sweep, a.stiffness.at(i), applied)
         };
     }
     // SAFETY: invocation i owns entry i of both outputs.
@@ -269,8 +286,8 @@ pub fn divergence_error_pass<R: Real, N: Neighbors>(i: usize, a: &DivergenceErro
 pub struct DensityErrorArgs<'a, R, N = Neighborhood<'a, Open>> {
     pub neighborhood: N,
     pub fluid: Fluid<R>,
-    /// The share of the stiffness that removes the error which a sweep applies (0 to 1).
-    pub relaxation: R,
+    /// How the sweep updates the stiffness.
+    pub sweep: Sweep<R>,
     /// The step's drift (s).
     pub dt: R,
     /// The step's kick (s).
@@ -284,7 +301,8 @@ pub struct DensityErrorArgs<'a, R, N = Neighborhood<'a, Open>> {
     pub acceleration: Vec3View<'a, R>,
     /// The stiffness applied so far in this solve (m^5/(kg s^2)).
     pub stiffness_sum: View<'a, R>,
-    /// The change of s_i this sweep applies (m^5/(kg s^2)); 0 for walls.
+    /// In, the change of s_i the last sweep applied; out, the change this sweep applies
+    /// (m^5/(kg s^2)); 0 for walls.
     pub stiffness: ViewMut<'a, R>,
     /// The part of rho_i + dt D rho_i / Dt - rho0 that violates the constraint (kg/m^3): an
     /// excess, or a deficit where the particle still pushes; 0 for walls.
@@ -301,7 +319,8 @@ pub fn density_error_pass<R: Real, N: Neighbors>(i: usize, a: &DensityErrorArgs<
         let velocity = Kicked { velocity_half: a.velocity_half, acceleration: a.acceleration, kick_dt: a.kick_dt };
         let rho = a.density.at(i);
         let excess = rho + density_change(i, &a.neighborhood, &a.fluid, a.id, a.dt, velocity).0 - a.fluid.rest_density;
-        (error, s) = projected(excess, factor, rho, a.dt, a.kick_dt, a.relaxation, a.stiffness_sum.at(i));
+        let removing = stiffness(excess, factor, rho, a.dt, a.kick_dt);
+        (error, s) = projected(excess, removing, a.sweep, a.stiffness.at(i), a.stiffness_sum.at(i));
     }
     // SAFETY: invocation i owns entry i of both outputs.
     unsafe {
