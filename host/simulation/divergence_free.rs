@@ -147,11 +147,10 @@ impl<R: Real, N: Neighbors> PressureSolve<'_, R, N> {
         self.sweeps(backend, self.settings.density_tolerance, error, target, x.density_sum)
     }
 
-    /// Jacobi sweeps, warm started from a share of `stiffness_sum` and accelerated by the scene's
+    /// Jacobi sweeps, warm started from a share of `stiffness_sum` and weighted by the scene's
     /// `chebyshev_radius`: each pushes `target` with the stiffness change the last error pass
-    /// found, at least `min_iterations` times and until
-    /// the fluid's mean error over rho0 is within `tolerance`; `stiffness_sum` ends with what was
-    /// applied.
+    /// found, at least `min_iterations` times and until the fluid's mean error over rho0 is
+    /// within `tolerance`; `stiffness_sum` ends with what was applied.
     fn sweeps<T: Topology, P: Passes<R, T, N>>(
         &self,
         backend: &mut P,
