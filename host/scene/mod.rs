@@ -443,10 +443,6 @@ fn is_one(x: &f64) -> bool {
     *x == 1.0
 }
 
-fn is_zero(x: &f64) -> bool {
-    *x == 0.0
-}
-
 /// How pressure is found.
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
@@ -500,7 +496,7 @@ pub struct DivergenceFree {
     /// deep pool, which plain sweeps shrink slowly, converge in fewer sweeps; the solution is
     /// the same. 0 sweeps plain Jacobi. Left out of the resolved scene at 0, so that checkpoints
     /// taken before the field existed keep their fingerprint.
-    #[serde(default, skip_serializing_if = "is_zero")]
+    #[serde(default, skip_serializing_if = "is_default")]
     pub chebyshev_radius: f64,
     /// What a step does when a solve has not met its tolerance within `max_iterations`: go on
     /// and count it in the summary (the next step's solves start from what it left), or stop
