@@ -27,7 +27,7 @@ use coil_kernels::counting_sort::{Counters, Gathered, ReorderArgs};
 use coil_kernels::cross_viscosity::{Cross, Newtonian};
 use coil_kernels::density::DensityArgs;
 use coil_kernels::dfsph_bender2017::{
-    DensityErrorArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, WarmStartArgs,
+    DensityErrorArgs, DensityRateArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, WarmStartArgs,
 };
 use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
 use coil_kernels::fluid_cells::{HoldsFluidArgs, NearFluidArgs};
@@ -95,6 +95,7 @@ fn ptx_entry_parameters_match_the_host_argument_layouts() {
         let mut add = |stem: &str, args: usize| expected.push((name(stem), vec![count, args]));
         add("density", size_of::<DensityArgs<R, Neighborhood<T>>>());
         add("density_spiky", size_of::<DensityArgs<R, Neighborhood<T>>>());
+        add("wall_density_spiky", size_of::<DensityArgs<R, Neighborhood<T>>>());
         add("continuity", size_of::<ContinuityArgs<R, Neighborhood<T>>>());
         add("continuity_spiky", size_of::<ContinuityArgs<R, Neighborhood<T>>>());
         add("stress_newtonian", size_of::<StressArgs<R, Newtonian<R>, KernelSum, Neighborhood<T>>>());
@@ -128,6 +129,7 @@ fn ptx_entry_parameters_match_the_host_argument_layouts() {
         add("dfsph_factor", size_of::<FactorArgs<R, Neighborhood<T>>>());
         add("divergence_error", size_of::<DivergenceErrorArgs<R, Neighborhood<T>>>());
         add("density_error", size_of::<DensityErrorArgs<R, Neighborhood<T>>>());
+        add("dfsph_density_rate", size_of::<DensityRateArgs<R, Neighborhood<T>>>());
         add("pressure_change", size_of::<PressureChangeArgs<R, Neighborhood<T>>>());
     }
     fn per_precision<R: Real>(expected: &mut Vec<(String, Vec<usize>)>) {

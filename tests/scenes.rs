@@ -110,7 +110,7 @@ fn bad_scenes_exit_2_naming_file_and_field() {
     let scene = scene.to_str().expect("utf-8");
     let solved = ["simulation.pressure=divergence_free", "material.density_equation=summation", "material.density_kernel=spiky"];
     let refused = [
-        (&["simulation.pressure=divergence_free", "material.density_equation=continuity"][..], "material.density_equation"),
+        (&["material.density_equation=continuity", "material.density_diffusion=0.1"][..], "material.density_diffusion"),
         (
             &["simulation.walls=mirrored", "simulation.time_step.viscous_velocity=half_step"],
             "simulation.time_step.viscous_velocity",
@@ -126,7 +126,7 @@ fn bad_scenes_exit_2_naming_file_and_field() {
     ];
     for (k, (sets, field)) in refused.iter().enumerate() {
         let mut args = vec!["check", scene];
-        let all = if k == 0 { sets.to_vec() } else { solved.iter().chain(sets.iter()).copied().collect() };
+        let all: Vec<&str> = solved.iter().chain(sets.iter()).copied().collect();
         for set in all {
             args.extend(["--set", set]);
         }
@@ -135,6 +135,12 @@ fn bad_scenes_exit_2_naming_file_and_field() {
         assert_eq!(out.status.code(), Some(2), "{sets:?}: {stderr}");
         assert!(stderr.contains("dam_break.toml") && stderr.contains(field), "{sets:?}: {stderr}");
     }
+    let mut args = vec!["check", scene];
+    for set in solved.iter().chain(&["material.density_equation=continuity", "material.density_diffusion=0"]) {
+        args.extend(["--set", set]);
+    }
+    let out = coil(&args);
+    assert_eq!(out.status.code(), Some(0), "the continuity density without diffusion: {}", String::from_utf8_lossy(&out.stderr));
     let missing = coil(&["run", dir.join("missing.toml").to_str().expect("utf-8")]);
     assert_eq!(missing.status.code(), Some(2));
     std::fs::remove_dir_all(&dir).ok();

@@ -9,9 +9,10 @@ use coil::scene::{
 use coil::validation::divergence_free::taylor_green_divergence_free;
 use coil::validation::hydrostatic::{self, Tank};
 use coil::validation::poiseuille::{cross_steady_velocity, relative_max_error, simulate, startup_velocity, Channel, CrossLaw};
+use coil::validation::viscous_thread::Treatment;
 use coil::validation::{
     cross_poiseuille, cross_poiseuille_implicit, cross_poiseuille_in, startup_poiseuille, startup_poiseuille_implicit,
-    startup_poiseuille_in, taylor_green, torus_ordering, HOURGLASS_CONTROL, MORRIS_TIMES,
+    startup_poiseuille_in, taylor_green, torus_ordering, viscous_thread, HOURGLASS_CONTROL, MORRIS_TIMES,
 };
 
 #[test]
@@ -512,4 +513,17 @@ fn the_ropes_pattern_is_read_from_the_direction_of_its_offset() {
     assert_eq!(rope_motion(&foot_samples(half_turn)).expect("measured").pattern, Pattern::Irregular);
     let nothing = [coil::validation::jet_axis::AxisSample { time_s: 0.1, displacement_over_d: None }];
     assert_eq!(rope_motion(&nothing), None);
+}
+
+/// The viscous thread (the shipped Newtonian jet's fluid falling 0.3 m onto nothing) with
+/// pressure solved on the continuity density at 5 across D: held back by its extensional
+/// viscosity as the slender thread is, where on the summed density, whose solve only pushes, it
+/// fell a third too fast (2.42 m/s in the lowest slab against the thread's 1.80; free fall
+/// 2.53). Measured: 0.102 (1.99 m/s), where the shipped weakly compressible formulation gives
+/// 0.093 at this resolution; the bound leaves 0.013 for the average over ten frames.
+#[test]
+fn a_divergence_free_thread_on_the_continuity_density_is_held_back_by_its_viscosity() {
+    let r = viscous_thread(5.0, ViscosityOperator::Stress, Treatment::DIVERGENCE_FREE, None).expect("stable");
+    eprintln!("{}: error {:.4}; {}", r.case, r.error, r.measure);
+    assert!(r.error < 0.115, "{}: error {:.4}; {}", r.case, r.error, r.measure);
 }

@@ -20,9 +20,10 @@ use coil_kernels::cell_grid::{HashArgs, Neighborhood};
 use coil_kernels::continuity_molteni2009::{ContinuityArgs, DensityIntegrationArgs};
 use coil_kernels::counting_sort::{scan_levels_len, Gathered, ReorderArgs};
 use coil_kernels::cross_viscosity::Rheology;
-use coil_kernels::density::{DensityArgs, DensityKernel};
+use coil_kernels::density::{DensityArgs, DensityKernel, Spiky};
 use coil_kernels::dfsph_bender2017::{
-    DensityErrorArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, WarmStartArgs, ERROR_RANGE,
+    DensityErrorArgs, DensityRateArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, WarmStartArgs,
+    ERROR_RANGE,
 };
 use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
 use coil_kernels::fluid::Fluid;
@@ -369,6 +370,9 @@ impl<R: Real, T: Topology> Passes<R, T, Neighborhood<'static, T>> for GpuPasses<
     fn continuity<K: DensityKernel>(&mut self, args: ContinuityArgs<'_, R, Neighborhood<'static, T>>) {
         self.run(kernel::<R>("continuity", K::NAME, T::NAME), args);
     }
+    fn wall_density(&mut self, args: DensityArgs<'_, R, Neighborhood<'static, T>>) {
+        self.run(kernel::<R>("wall_density", Spiky::NAME, T::NAME), args);
+    }
     fn density_integration(&mut self, args: DensityIntegrationArgs<'_, R>) {
         self.run(kernel::<R>("density_integration", "", ""), args);
     }
@@ -453,6 +457,9 @@ impl<R: Real, T: Topology> Passes<R, T, Neighborhood<'static, T>> for GpuPasses<
     }
     fn density_error(&mut self, args: DensityErrorArgs<'_, R, Neighborhood<'static, T>>) {
         self.run(kernel::<R>("density_error", "", T::NAME), args);
+    }
+    fn dfsph_density_rate(&mut self, args: DensityRateArgs<'_, R, Neighborhood<'static, T>>) {
+        self.run(kernel::<R>("dfsph_density_rate", "", T::NAME), args);
     }
     fn pressure_change(&mut self, args: PressureChangeArgs<'_, R, Neighborhood<'static, T>>) {
         self.run(kernel::<R>("pressure_change", "", T::NAME), args);

@@ -363,11 +363,13 @@ impl Check<'_> {
     }
 
     fn divergence_free(&self, s: &SimulationSettings, m: &Material) -> Checked {
-        if m.density_equation == DensityEquation::Continuity {
+        if m.density_equation == DensityEquation::Continuity && m.density_diffusion != 0.0 {
             return self.fail(
-                "simulation.pressure",
-                "\"divergence_free\" corrects the summed density of Eq. (5); set material.density_equation = \"summation\""
-                    .into(),
+                "material.density_diffusion",
+                format!(
+                    "must be 0 with simulation.pressure = \"divergence_free\": the continuity density then follows the density solve's prediction, which diffusion would move it off (the jets went unstable at the nozzle), got {}",
+                    short(m.density_diffusion)
+                ),
             );
         }
         if s.walls == Walls::Mirrored && s.time_step.viscous_velocity == ViscousVelocity::HalfStep {

@@ -12,7 +12,7 @@ use coil_kernels::continuity_molteni2009::{ContinuityArgs, DensityIntegrationArg
 use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::density::{DensityArgs, DensityKernel};
 use coil_kernels::dfsph_bender2017::{
-    DensityErrorArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, WarmStartArgs,
+    DensityErrorArgs, DensityRateArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, WarmStartArgs,
 };
 use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::LeapfrogArgs;
@@ -40,6 +40,8 @@ use std::fmt::Display;
 pub trait Passes<R: Real, T: Topology, N: Neighbors> {
     fn density<K: DensityKernel>(&mut self, args: DensityArgs<'_, R, N>);
     fn continuity<K: DensityKernel>(&mut self, args: ContinuityArgs<'_, R, N>);
+    /// The walls' density with the spiky kernel, which the divergence-free solves require.
+    fn wall_density(&mut self, args: DensityArgs<'_, R, N>);
     fn density_integration(&mut self, args: DensityIntegrationArgs<'_, R>);
     fn mirrored_wall(&mut self, args: MirroredWallArgs<'_, R, T>);
     fn stress<Rh: Rheology<R>, G: GradientEstimate>(&mut self, args: StressArgs<'_, R, Rh, G, N>);
@@ -69,6 +71,7 @@ pub trait Passes<R: Real, T: Topology, N: Neighbors> {
     fn dfsph_factor(&mut self, args: FactorArgs<'_, R, N>);
     fn divergence_error(&mut self, args: DivergenceErrorArgs<'_, R, N>);
     fn density_error(&mut self, args: DensityErrorArgs<'_, R, N>);
+    fn dfsph_density_rate(&mut self, args: DensityRateArgs<'_, R, N>);
     fn pressure_change(&mut self, args: PressureChangeArgs<'_, R, N>);
     fn warm_start(&mut self, args: WarmStartArgs<'_, R>);
     /// The error of `args` summed over the live fluid particles, and their count, in range

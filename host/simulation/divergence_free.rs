@@ -1,6 +1,7 @@
 //! The divergence-free pressure solves of a step (`coil_kernels::dfsph_bender2017`), written
 //! once over the backend's passes: the factors, the divergence solve on the half-step velocity
-//! before the model's accelerations, and the density solve on the acceleration after them.
+//! before the model's accelerations, the density solve on the acceleration after them, and,
+//! with the continuity density, the density rate the density solve predicts.
 
 use crate::scene::DivergenceFree;
 use crate::simulation::backend::{Passes, PressureViews};
@@ -8,7 +9,7 @@ use crate::simulation::inlet::Inlet;
 use crate::simulation::model::SolveReport;
 use coil_kernels::cell_grid::Neighbors;
 use coil_kernels::dfsph_bender2017::{
-    DensityErrorArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, Sweep, WarmStartArgs,
+    DensityErrorArgs, DensityRateArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, Sweep, WarmStartArgs,
 };
 use coil_kernels::fluid::Fluid;
 use coil_kernels::nozzle::{NozzleArgs, NozzleShiftArgs};
@@ -65,6 +66,9 @@ pub struct PressureSolve<'a, R, N> {
     pub velocity_half: Vec3ViewMut<'a, R>,
     /// The step's acceleration (m/s^2), which the density solve corrects.
     pub acceleration: Vec3ViewMut<'a, R>,
+    /// Whether the density is the continuity equation's, on which the density solve may pull
+    /// (`coil_kernels::dfsph_bender2017`); otherwise it is summed and pressure only pushes.
+    pub continuity: bool,
     pub arrays: PressureViews<'a, R>,
     /// The run's inlets, whose tubes set the velocity of the fluid inside them.
     pub inlets: &'a [Inlet],
@@ -138,6 +142,7 @@ impl<R: Real, N: Neighbors> PressureSolve<'_, R, N> {
                 factor: x.factor.read(),
                 velocity_half: self.velocity_half.read(),
                 acceleration: self.acceleration.read(),
+                least_stiffness: if self.continuity { R::from_f64(f64::NEG_INFINITY) } else { R::ZERO },
                 stiffness_sum: x.density_sum.read(),
                 stiffness: x.stiffness,
                 error: x.error,
@@ -145,6 +150,21 @@ impl<R: Real, N: Neighbors> PressureSolve<'_, R, N> {
         };
         let target = Target { values: self.acceleration, scale: R::ONE, wall_head: self.fluid.wall_stiffness_share };
         self.sweeps(backend, self.settings.density_tolerance, error, target, x.density_sum)
+    }
+
+    /// The continuity equation's density rate over the step as the density solve predicts it,
+    /// for the density to end the step where the solve put it.
+    pub fn density_rate<T: Topology, P: Passes<R, T, N>>(&self, backend: &mut P, density_rate: ViewMut<'_, R>) {
+        backend.dfsph_density_rate(DensityRateArgs {
+            neighborhood: self.neighborhood,
+            fluid: self.fluid,
+            kick_dt: self.kick_dt,
+            id: self.id,
+            factor: self.arrays.factor.read(),
+            velocity_half: self.velocity_half.read(),
+            acceleration: self.acceleration.read(),
+            density_rate,
+        });
     }
 
     /// Jacobi sweeps, warm started from a share of `stiffness_sum` and weighted by the scene's

@@ -432,7 +432,8 @@ fn in_topology<R: Real, B: Backend<R>, S: Schedule<R>>(backend: &mut B, schedule
 }
 
 /// Algorithm 1, lines 5-8: density (pressure is evaluated from it where it is read), or, with
-/// the continuity equation, the fluid's density rate and the walls' density.
+/// the continuity equation, the fluid's density rate and the walls' density; where pressure is
+/// solved on the continuity density, the walls' alone (the density solve predicts the rate).
 struct DensityPass<'r, R: Real, M: Model<R>> {
     run: &'r RunState<R, M>,
 }
@@ -459,7 +460,9 @@ fn density_with<R: Real, M: Model<R>, K: DensityKernel, T: Topology, N: Neighbor
     v: &ParticleViews<'_, R, T, N>,
     passes: &mut P,
 ) {
+    let density_args = DensityArgs { neighborhood: v.neighbors, fluid: run.fluid, id: v.id, density: v.density };
     match v.density_rate {
+        Some(_) if run.pressure_solve.is_some() => passes.wall_density(density_args),
         Some(density_rate) => passes.continuity::<K>(ContinuityArgs {
             neighborhood: v.neighbors,
             fluid: run.fluid,
@@ -469,7 +472,7 @@ fn density_with<R: Real, M: Model<R>, K: DensityKernel, T: Topology, N: Neighbor
             density: v.density,
             density_rate,
         }),
-        None => passes.density::<K>(DensityArgs { neighborhood: v.neighbors, fluid: run.fluid, id: v.id, density: v.density }),
+        None => passes.density::<K>(density_args),
     }
 }
 
@@ -504,6 +507,7 @@ impl<R: Real, M: Model<R>> Schedule<R> for ForcesAndMotion<'_, R, M> {
             density: v.density.read(),
             velocity_half: v.velocity_half,
             acceleration: v.acceleration,
+            continuity: v.density_rate.is_some(),
             arrays,
             inlets: run.inlets(),
             time: run.time,
@@ -565,8 +569,12 @@ impl<R: Real, M: Model<R>> Schedule<R> for ForcesAndMotion<'_, R, M> {
         if let (Some(solve), Some(divergence)) = (&pressure_solve, divergence) {
             *self.pressure_solves = Some([divergence, solve.density(passes)]);
         }
-        // The continuity equation's density after the accelerations have read this step's.
+        // The continuity equation's density after the accelerations have read this step's;
+        // where pressure is solved, the density the solve predicted.
         if let Some(density_rate) = v.density_rate {
+            if let Some(solve) = &pressure_solve {
+                solve.density_rate(passes, density_rate);
+            }
             passes.density_integration(DensityIntegrationArgs {
                 fluid,
                 dt: R::from_f64(self.dt),

@@ -809,11 +809,15 @@ pub fn viscous_thread(
     Ok(CaseResult {
         case,
         measure: format!(
-            "largest |U / U_thread - 1| over 12 slabs from 12.5 mm below the nozzle to 12.5 mm above the floor, frames every 0.02 s from 0.5 to 0.7 s (lowest slab: {:.3} m/s, the thread {:.3}, free fall {:.3}); fitted Trouton ratio {trouton:.2} (3 for the liquid); density / rho0 by slab {}; c = 20 m/s",
+            "largest |U / U_thread - 1| over 12 slabs from 12.5 mm below the nozzle to 12.5 mm above the floor, frames every 0.02 s from 0.5 to 0.7 s (lowest slab: {:.3} m/s, the thread {:.3}, free fall {:.3}); fitted Trouton ratio {trouton:.2} (3 for the liquid); density / rho0 by slab {}; {}",
             lowest.speed_m_s,
             viscous_thread::speed_at(&reference, lowest.z_m),
             (thread.nozzle_speed_m_s.powi(2) + 2.0 * thread.gravity_m_s2 * lowest.z_m).sqrt(),
-            densities.join(", ")
+            densities.join(", "),
+            match treatment.pressure {
+                Pressure::WeaklyCompressible => "c = 20 m/s",
+                Pressure::DivergenceFree => "at the CFL step",
+            }
         ),
         error,
         tolerance: 0.05,

@@ -177,11 +177,12 @@ fn cases(quick: bool, out: &Path) -> Vec<Case<'_>> {
                 cases.push(Case::one(Group::Thread, false, move || viscous_thread(across, op, treatment, out)));
             }
         }
-        let renormalized = Treatment::RENORMALIZED;
         let binding = across >= 8.0;
-        cases.push(Case::one(Group::Thread, binding, move || {
-            viscous_thread(across, ViscosityOperator::Stress, renormalized, out)
-        }));
+        for treatment in [Treatment::RENORMALIZED, Treatment::DIVERGENCE_FREE] {
+            cases.push(Case::one(Group::Thread, binding, move || {
+                viscous_thread(across, ViscosityOperator::Stress, treatment, out)
+            }));
+        }
     }
     if !quick {
         let paper_jets = [(12.0, ViscosityOperator::Stress, 0.0, true, true), (3.0, ViscosityOperator::Stress, 0.0, false, true)];

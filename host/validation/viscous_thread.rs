@@ -5,7 +5,7 @@
 //! 3 nu.
 
 use super::snapshot::snapshots;
-use crate::scene::{DensityEquation, Scene, VelocityGradient, ViscosityOperator};
+use crate::scene::{DensityEquation, DensityKernelKind, Pressure, Scene, VelocityGradient, ViscosityOperator, ViscositySolver};
 
 /// The shipped Newtonian jet.
 const NEWTONIAN_JET: &str = include_str!("../../scenes/newtonian_jet.toml");
@@ -127,6 +127,8 @@ pub struct Treatment {
     pub particle_shifting: f64,
     /// The paper's operator's velocity gradient (the other operators have their own).
     pub velocity_gradient: VelocityGradient,
+    /// Weakly compressible, or solved with viscosity implicit at the CFL step.
+    pub pressure: Pressure,
 }
 
 impl Treatment {
@@ -139,24 +141,28 @@ impl Treatment {
             clamp_negative_pressure: true,
             particle_shifting: 0.0,
             velocity_gradient: VelocityGradient::Sph,
+            pressure: Pressure::WeaklyCompressible,
         },
         Treatment {
             density_equation: DensityEquation::Summation,
             clamp_negative_pressure: false,
             particle_shifting: 0.0,
             velocity_gradient: VelocityGradient::Sph,
+            pressure: Pressure::WeaklyCompressible,
         },
         Treatment {
             density_equation: DensityEquation::Continuity,
             clamp_negative_pressure: false,
             particle_shifting: 0.0,
             velocity_gradient: VelocityGradient::Sph,
+            pressure: Pressure::WeaklyCompressible,
         },
         Treatment {
             density_equation: DensityEquation::Continuity,
             clamp_negative_pressure: false,
             particle_shifting: 2.0,
             velocity_gradient: VelocityGradient::Sph,
+            pressure: Pressure::WeaklyCompressible,
         },
     ];
 
@@ -167,6 +173,18 @@ impl Treatment {
         clamp_negative_pressure: false,
         particle_shifting: 2.0,
         velocity_gradient: VelocityGradient::Renormalized,
+        pressure: Pressure::WeaklyCompressible,
+    };
+
+    /// Pressure solved (divergence-free SPH) on the continuity density, with implicit viscosity
+    /// on the paper's operator at the own density and particle shifting (A = 2): the
+    /// divergence-free formulation that thins as the liquid does.
+    pub const DIVERGENCE_FREE: Treatment = Treatment {
+        density_equation: DensityEquation::Continuity,
+        clamp_negative_pressure: false,
+        particle_shifting: 2.0,
+        velocity_gradient: VelocityGradient::OwnDensity,
+        pressure: Pressure::DivergenceFree,
     };
 
     /// How a case names its density and pressure, and how a plot's file name does.
@@ -182,6 +200,9 @@ impl Treatment {
     /// How a case names it.
     pub fn name(&self) -> String {
         let mut name = self.density_names().0.to_string();
+        if self.pressure == Pressure::DivergenceFree {
+            name = format!("divergence-free pressure, implicit viscosity, {name}");
+        }
         if self.particle_shifting > 0.0 {
             name += &format!(", particle shifting A = {}", self.particle_shifting);
         }
@@ -199,6 +220,9 @@ impl Treatment {
         }
         if self.velocity_gradient == VelocityGradient::Renormalized {
             word += "_renormalized";
+        }
+        if self.pressure == Pressure::DivergenceFree {
+            word += "_divergence_free";
         }
         word
     }
@@ -233,6 +257,12 @@ pub fn thread_scene(
     scene.simulation.end_time_s = end_time_s;
     scene.simulation.max_fluid_particles = Some(4_000_000);
     scene.simulation.particle_shifting = treatment.particle_shifting;
+    if treatment.pressure == Pressure::DivergenceFree {
+        scene.simulation.pressure = Pressure::DivergenceFree;
+        scene.material.density_kernel = DensityKernelKind::Spiky;
+        scene.material.density_diffusion = 0.0;
+        scene.material.viscosity.solver = ViscositySolver::Implicit;
+    }
     scene.name = format!("viscous_thread_{across}");
     let thread = SlenderThread {
         nozzle_speed_m_s: scene.inlets[0].speed_m_s,

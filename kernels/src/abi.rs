@@ -15,7 +15,7 @@ use crate::counting_sort::{Counters, Gathered, ReorderArgs};
 use crate::cross_viscosity::{Cross, Newtonian};
 use crate::density::DensityArgs;
 use crate::dfsph_bender2017::{
-    DensityErrorArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, Sweep, WarmStartArgs,
+    DensityErrorArgs, DensityRateArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, Sweep, WarmStartArgs,
 };
 use crate::diagnostics::{DiagnosticsArgs, StateFigures};
 use crate::fluid::Fluid;
@@ -189,13 +189,15 @@ layouts!(R;
         neighborhood, fluid, sweep, dt, kick_dt, id, density, factor, velocity_half, stiffness_sum, stiffness, error
     }
     DensityErrorArgs<'static, R, O> {
-        neighborhood, fluid, sweep, dt, kick_dt, id, density, factor, velocity_half, acceleration, stiffness_sum,
-        stiffness, error
+        neighborhood, fluid, sweep, dt, kick_dt, id, density, factor, velocity_half, acceleration, least_stiffness,
+        stiffness_sum, stiffness, error
     }
     DensityErrorArgs<'static, R, P> {
-        neighborhood, fluid, sweep, dt, kick_dt, id, density, factor, velocity_half, acceleration, stiffness_sum,
-        stiffness, error
+        neighborhood, fluid, sweep, dt, kick_dt, id, density, factor, velocity_half, acceleration, least_stiffness,
+        stiffness_sum, stiffness, error
     }
+    DensityRateArgs<'static, R, O> { neighborhood, fluid, kick_dt, id, factor, velocity_half, acceleration, density_rate }
+    DensityRateArgs<'static, R, P> { neighborhood, fluid, kick_dt, id, factor, velocity_half, acceleration, density_rate }
     PressureChangeArgs<'static, R, O> { neighborhood, fluid, id, density, stiffness, wall_head, scale, target, stiffness_sum }
     PressureChangeArgs<'static, R, P> { neighborhood, fluid, id, density, stiffness, wall_head, scale, target, stiffness_sum }
     WarmStartArgs<'static, R> { share, stiffness_sum, stiffness }

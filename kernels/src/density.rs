@@ -95,3 +95,14 @@ pub fn density_pass<R: Real, K: DensityKernel, N: Neighbors>(i: usize, a: &Densi
     // SAFETY: invocation i owns entry i.
     unsafe { a.density.write(i, rho) };
 }
+
+/// The walls' part of [`density_pass`]: fixed boundary particle `i`'s density by
+/// [`boundary_density`]; fluid particles are left as they are, where their density is
+/// integrated instead and nothing else is needed of this pass.
+#[inline(always)]
+pub fn wall_density_pass<R: Real, K: DensityKernel, N: Neighbors>(i: usize, a: &DensityArgs<R, N>) {
+    if a.fluid.is_boundary(a.id.at(i)) {
+        // SAFETY: invocation i owns entry i.
+        unsafe { a.density.write(i, boundary_density::<R, K, N>(i, &a.neighborhood, &a.fluid)) };
+    }
+}

@@ -25,17 +25,21 @@
 //! symmetric (mirrored in the force alone, a closed channel at rest grew noise from rounding).
 //! Where the fluid stops at a wall, as the solves make it, the prediction is the same.
 //!
-//! Pressure pushes and never pulls: each sweep is a projected Jacobi update, relaxed, that keeps
-//! every particle's summed stiffness at or above zero. A free surface, whose summed density
-//! falls short of rho0, is never pulled back together, and a dilating flow is left alone; a
-//! particle that an earlier update over-expanded sheds its stiffness. A sweep may also repeat a
+//! Pressure pushes and never pulls on the summed density of Eq. (5): each sweep is a projected
+//! Jacobi update, relaxed, that keeps every particle's summed stiffness at or above zero. A free
+//! surface, whose summed density falls short of rho0, is never pulled back together, and a
+//! dilating flow is left alone; a particle that an earlier update over-expanded sheds its
+//! stiffness. On the continuity density, which has no free-surface deficit, the density solve
+//! may pull ([`DensityErrorArgs::least_stiffness`]): a stretching viscous thread holds the
+//! tension that thins it, and [`density_rate_pass`] integrates the density the solve predicted. A sweep may also repeat a
 //! share of the last sweep's change ([`Sweep`]): Chebyshev's weights, which the host picks, let
 //! the long pressure waves of a deep pool converge in fewer sweeps.
 //!
 //! The passes of one step, in order: [`factor_pass`]; on the half-step velocity
 //! [`warm_start_pass`] and [`pressure_change_pass`], then per sweep [`divergence_error_pass`],
 //! [`error_sum_pass`] and [`pressure_change_pass`]; the model's accelerations; then the same
-//! with [`density_error_pass`] on the acceleration.
+//! with [`density_error_pass`] on the acceleration; with the continuity density,
+//! [`density_rate_pass`].
 
 use crate::cell_grid::{GradientSum, Neighborhood, Neighbors};
 use crate::fluid::Fluid;
@@ -203,16 +207,16 @@ fn stiffness<R: Real>(error: R, factor: R, density: R, dt: R, kick_dt: R) -> R {
 /// One projected Jacobi update of a particle whose density would change by `excess` (kg/m^3)
 /// over the step, which stiffness `removing` would remove, whose stiffness applied so far is
 /// `applied` and whose last sweep changed it by `last`: the stiffness change `sweep` makes of
-/// them, held so that the particle's stiffness stays at or above zero (pressure pushes, never
-/// pulls), and the part of the excess that violates the constraint (kg/m^3): a compression, or
-/// an expansion where the particle still pushes.
+/// them, held so that the particle's stiffness stays at or above `least` (0: pressure pushes,
+/// never pulls), and the part of the excess that violates the constraint (kg/m^3): a
+/// compression, or an expansion where the particle's stiffness is above `least`.
 ///
 /// Projection rather than a clamped error is what lets a warm start work: a particle that the
 /// last step's stiffness now over-expands sheds it instead of keeping it.
 #[inline(always)]
-fn projected<R: Real>(excess: R, removing: R, sweep: Sweep<R>, last: R, applied: R) -> (R, R) {
-    let change = (sweep.relaxation * removing + sweep.momentum * last).max(-applied);
-    let violation = if excess > R::ZERO || applied > R::ZERO { excess.abs() } else { R::ZERO };
+fn projected<R: Real>(excess: R, removing: R, sweep: Sweep<R>, last: R, applied: R, least: R) -> (R, R) {
+    let change = (sweep.relaxation * removing + sweep.momentum * last).max(least - applied);
+    let violation = if excess > R::ZERO || applied > least { excess.abs() } else { R::ZERO };
     (violation, change)
 }
 
@@ -270,7 +274,7 @@ pub fn divergence_error_pass<R: Real, N: Neighbors>(i: usize, a: &DivergenceErro
             (R::ZERO, -applied)
         } else {
             let removing = stiffness(change, factor, a.density.at(i), a.dt, a.kick_dt);
-            projected(change, removing, a.sweep, a.stiffness.at(i), applied)
+            projected(change, removing, a.sweep, a.stiffness.at(i), applied, R::ZERO)
         };
     }
     // SAFETY: invocation i owns entry i of both outputs.
@@ -299,6 +303,9 @@ pub struct DensityErrorArgs<'a, R, N = Neighborhood<'a, Open>> {
     pub velocity_half: Vec3View<'a, R>,
     /// The step's acceleration so far (m/s^2): v_{n+1/2} = v_{n-1/2} + kick_dt a.
     pub acceleration: Vec3View<'a, R>,
+    /// The least stiffness the solve may sum to (m^5/(kg s^2)): 0 on the summed density, where
+    /// pressure only pushes; minus infinity on the continuity density, where it may pull.
+    pub least_stiffness: R,
     /// The stiffness applied so far in this solve (m^5/(kg s^2)).
     pub stiffness_sum: View<'a, R>,
     /// In, the change of s_i the last sweep applied; out, the change this sweep applies
@@ -320,13 +327,52 @@ pub fn density_error_pass<R: Real, N: Neighbors>(i: usize, a: &DensityErrorArgs<
         let rho = a.density.at(i);
         let excess = rho + density_change(i, &a.neighborhood, &a.fluid, a.id, a.dt, velocity).0 - a.fluid.rest_density;
         let removing = stiffness(excess, factor, rho, a.dt, a.kick_dt);
-        (error, s) = projected(excess, removing, a.sweep, a.stiffness.at(i), a.stiffness_sum.at(i));
+        (error, s) = projected(excess, removing, a.sweep, a.stiffness.at(i), a.stiffness_sum.at(i), a.least_stiffness);
     }
     // SAFETY: invocation i owns entry i of both outputs.
     unsafe {
         a.error.write(i, error);
         a.stiffness.write(i, s);
     }
+}
+
+/// Arguments of [`density_rate_pass`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct DensityRateArgs<'a, R, N = Neighborhood<'a, Open>> {
+    pub neighborhood: N,
+    pub fluid: Fluid<R>,
+    /// The step's kick (s).
+    pub kick_dt: R,
+    pub id: View<'a, u32>,
+    pub factor: View<'a, R>,
+    /// v_{n-1/2} (m/s).
+    pub velocity_half: Vec3View<'a, R>,
+    /// The step's acceleration, the density solve's included (m/s^2).
+    pub acceleration: Vec3View<'a, R>,
+    /// d rho / dt of fluid particles out (kg/(m^3 s)).
+    pub density_rate: ViewMut<'a, R>,
+}
+
+/// The continuity equation's d rho_i / dt (kg/(m^3 s)) over the step as the density solve
+/// predicts it, sum_j m_j (v_i - v_j) . grad W_ij on the velocity the step ends at,
+/// v_{n-1/2} + kick_dt a, at the step's positions, a wall's term weighted as in the solve:
+/// integrated over dt it gives each particle the density the solve drove to rho0, where the
+/// continuity equation on the full-step velocity would drift from it step by step. 0 for a
+/// particle without a factor: a wall, fluid inside a nozzle's tube (delivered at rho0, its
+/// motion imposed), a lone droplet.
+#[inline(always)]
+pub fn density_rate_pass<R: Real, N: Neighbors>(i: usize, a: &DensityRateArgs<R, N>) {
+    if a.fluid.is_boundary(a.id.at(i)) {
+        return;
+    }
+    let mut rate = R::ZERO;
+    if a.factor.at(i) > R::ZERO {
+        let velocity = Kicked { velocity_half: a.velocity_half, acceleration: a.acceleration, kick_dt: a.kick_dt };
+        rate = density_change(i, &a.neighborhood, &a.fluid, a.id, R::ONE, velocity).0;
+    }
+    // SAFETY: invocation i owns entry i.
+    unsafe { a.density_rate.write(i, rate) };
 }
 
 /// Arguments of [`pressure_change_pass`].

@@ -19,10 +19,11 @@ use crate::counting_sort::{
     sum_chunk, Counters, ReorderArgs,
 };
 use crate::cross_viscosity::{Cross, Newtonian};
-use crate::density::{density_pass, DensityArgs, Poly6, Spiky};
+use crate::density::{density_pass, wall_density_pass, DensityArgs, Poly6, Spiky};
 use crate::dfsph_bender2017::{
-    density_error_pass, divergence_error_pass, error_sum_pass, factor_pass, pressure_change_pass, warm_start_pass,
-    DensityErrorArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, WarmStartArgs,
+    density_error_pass, density_rate_pass, divergence_error_pass, error_sum_pass, factor_pass, pressure_change_pass,
+    warm_start_pass, DensityErrorArgs, DensityRateArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs,
+    WarmStartArgs,
 };
 use crate::diagnostics::{diagnostics_pass, DiagnosticsArgs, StateFigures};
 use crate::fluid_cells::{holds_fluid_pass, near_fluid_pass, HoldsFluidArgs, NearFluidArgs};
@@ -191,6 +192,18 @@ per_neighborhood_kernels!(density_f32, density_periodic_f32, DensityArgs<f32>, d
 per_neighborhood_kernels!(density_f64, density_periodic_f64, DensityArgs<f64>, density_pass<f64, Poly6>);
 per_neighborhood_kernels!(density_spiky_f32, density_spiky_periodic_f32, DensityArgs<f32>, density_pass<f32, Spiky>);
 per_neighborhood_kernels!(density_spiky_f64, density_spiky_periodic_f64, DensityArgs<f64>, density_pass<f64, Spiky>);
+per_neighborhood_kernels!(
+    wall_density_spiky_f32,
+    wall_density_spiky_periodic_f32,
+    DensityArgs<f32>,
+    wall_density_pass<f32, Spiky>
+);
+per_neighborhood_kernels!(
+    wall_density_spiky_f64,
+    wall_density_spiky_periodic_f64,
+    DensityArgs<f64>,
+    wall_density_pass<f64, Spiky>
+);
 per_neighborhood_kernels!(continuity_f32, continuity_periodic_f32, ContinuityArgs<f32>, continuity_pass<f32, Poly6>);
 per_neighborhood_kernels!(continuity_f64, continuity_periodic_f64, ContinuityArgs<f64>, continuity_pass<f64, Poly6>);
 per_neighborhood_kernels!(
@@ -511,6 +524,8 @@ per_neighborhood_kernels!(
 );
 per_neighborhood_kernels!(density_error_f32, density_error_periodic_f32, DensityErrorArgs<f32>, density_error_pass<f32>);
 per_neighborhood_kernels!(density_error_f64, density_error_periodic_f64, DensityErrorArgs<f64>, density_error_pass<f64>);
+per_neighborhood_kernels!(dfsph_density_rate_f32, dfsph_density_rate_periodic_f32, DensityRateArgs<f32>, density_rate_pass<f32>);
+per_neighborhood_kernels!(dfsph_density_rate_f64, dfsph_density_rate_periodic_f64, DensityRateArgs<f64>, density_rate_pass<f64>);
 per_neighborhood_kernels!(pressure_change_f32, pressure_change_periodic_f32, PressureChangeArgs<f32>, pressure_change_pass<f32>);
 per_neighborhood_kernels!(pressure_change_f64, pressure_change_periodic_f64, PressureChangeArgs<f64>, pressure_change_pass<f64>);
 per_index_kernel!(warm_start_f32, WarmStartArgs<'static, f32>, warm_start_pass::<f32>);
@@ -732,6 +747,10 @@ pub const ENTRIES: &[(&str, Emulated)] = {
         density_error_periodic_f32,
         density_error_f64,
         density_error_periodic_f64,
+        dfsph_density_rate_f32,
+        dfsph_density_rate_periodic_f32,
+        dfsph_density_rate_f64,
+        dfsph_density_rate_periodic_f64,
         pressure_change_f32,
         pressure_change_periodic_f32,
         pressure_change_f64,
@@ -749,6 +768,10 @@ pub const ENTRIES: &[(&str, Emulated)] = {
         density_spiky_periodic_f32,
         density_spiky_f64,
         density_spiky_periodic_f64,
+        wall_density_spiky_f32,
+        wall_density_spiky_periodic_f32,
+        wall_density_spiky_f64,
+        wall_density_spiky_periodic_f64,
         continuity_f32,
         continuity_periodic_f32,
         continuity_f64,
