@@ -124,7 +124,7 @@ fn bad_scenes_exit_2_naming_file_and_field() {
         (&["simulation.divergence_free.density_tolerance=0.5"], "simulation.divergence_free.density_tolerance"),
         (&["simulation.divergence_free.cfl_factor=1.5"], "simulation.divergence_free.cfl_factor"),
     ];
-    for (k, (sets, field)) in refused.iter().enumerate() {
+    for (sets, field) in refused {
         let mut args = vec!["check", scene];
         let all: Vec<&str> = solved.iter().chain(sets.iter()).copied().collect();
         for set in all {
