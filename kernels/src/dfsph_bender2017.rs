@@ -31,9 +31,9 @@
 //! dilating flow is left alone; a particle that an earlier update over-expanded sheds its
 //! stiffness. On the continuity density, which has no free-surface deficit, the density solve
 //! may pull ([`DensityErrorArgs::least_stiffness`]): a stretching viscous thread holds the
-//! tension that thins it, and [`density_rate_pass`] integrates the density the solve predicted. A sweep may also repeat a
-//! share of the last sweep's change ([`Sweep`]): Chebyshev's weights, which the host picks, let
-//! the long pressure waves of a deep pool converge in fewer sweeps.
+//! tension that thins it, and [`density_rate_pass`] integrates the density the solve predicted.
+//! A sweep may also repeat a share of the last sweep's change ([`Sweep`]): Chebyshev's weights,
+//! which the host picks, let the long pressure waves of a deep pool converge in fewer sweeps.
 //!
 //! The passes of one step, in order: [`factor_pass`]; on the half-step velocity
 //! [`warm_start_pass`] and [`pressure_change_pass`], then per sweep [`divergence_error_pass`],
@@ -359,8 +359,8 @@ pub struct DensityRateArgs<'a, R, N = Neighborhood<'a, Open>> {
 /// v_{n-1/2} + kick_dt a, at the step's positions, a wall's term weighted as in the solve:
 /// integrated over dt it gives each particle the density the solve drove to rho0, where the
 /// continuity equation on the full-step velocity would drift from it step by step. 0 for a
-/// particle without a factor: a wall, fluid inside a nozzle's tube (delivered at rho0, its
-/// motion imposed), a lone droplet.
+/// fluid particle without a factor: inside a nozzle's tube (delivered at rho0, its motion
+/// imposed), or a lone droplet. Walls, whose density is summed, are left as they are.
 #[inline(always)]
 pub fn density_rate_pass<R: Real, N: Neighbors>(i: usize, a: &DensityRateArgs<R, N>) {
     if a.fluid.is_boundary(a.id.at(i)) {
