@@ -95,7 +95,7 @@ fn ptx_entry_parameters_match_the_host_argument_layouts() {
         let mut add = |stem: &str, args: usize| expected.push((name(stem), vec![count, args]));
         add("density", size_of::<DensityArgs<R, Neighborhood<T>>>());
         add("density_spiky", size_of::<DensityArgs<R, Neighborhood<T>>>());
-        add("wall_density_spiky", size_of::<DensityArgs<R, Neighborhood<T>>>());
+        add("continuity_floor_spiky", size_of::<DensityArgs<R, Neighborhood<T>>>());
         add("continuity", size_of::<ContinuityArgs<R, Neighborhood<T>>>());
         add("continuity_spiky", size_of::<ContinuityArgs<R, Neighborhood<T>>>());
         add("stress_newtonian", size_of::<StressArgs<R, Newtonian<R>, KernelSum, Neighborhood<T>>>());

@@ -1941,3 +1941,38 @@ fn the_density_solve_predicts_the_density_its_rate_integrates_and_pulls_only_whe
         }
     }
 }
+
+/// Where pressure is solved on the continuity density, the step's first density pass raises a
+/// fluid particle's integrated density to its Eq. (5) sum where the particles pack closer than
+/// it says, and leaves it where they do not: inside a 12^3 lattice, whose sum is rho0, a
+/// density 3 % low is raised to rho0 and one 2 % high is kept; on the lattice's face, whose sum
+/// falls short as a free surface's does, rho0 is kept.
+#[test]
+fn the_continuity_floor_raises_a_density_to_its_sum_only_where_the_particles_pack_closer() {
+    use coil::scene::setup::{calibrated_kernels, calibrated_mass};
+    use coil::simulation::particles::{vec3_view, ModelFields};
+    use coil_kernels::density::{continuity_floor_pass, density, DensityArgs, Spiky};
+    use coil_kernels::view::ViewMut;
+    let (p, grid, lattice, centre) = rest_lattice_12(ModelFields::default(), |_| [0.0; 3]);
+    let (rho0, s) = (LATTICE_REST_DENSITY, LATTICE_SPACING);
+    let fluid = Fluid {
+        mass: calibrated_mass(rho0, s, 2.0 * s, DensityKernelKind::Spiky),
+        kernels: calibrated_kernels(rho0, s, 2.0 * s, DensityKernelKind::Spiky),
+        ..lattice
+    };
+    let n = p.len();
+    let neighborhood = grid.neighborhood(vec3_view(&p.position, n), Open);
+    let face = (0..n).find(|&i| p.position[2][i] < s).expect("a particle on the face");
+    let summed = |i: usize| density::<f64, Spiky, _>(i, &neighborhood, &fluid);
+    assert!((summed(centre) - rho0).abs() < 1e-9 * rho0, "the lattice sums to rho0: {}", summed(centre));
+    assert!(summed(face) < 0.9 * rho0, "the face's sum falls short: {}", summed(face));
+    let floored = |i: usize, integrated: f64| {
+        let mut rho = vec![integrated; n];
+        let args = DensityArgs { neighborhood, fluid, id: View::new(&p.id[..n]), density: ViewMut::new(&mut rho) };
+        continuity_floor_pass::<f64, Spiky, _>(i, &args);
+        rho[i]
+    };
+    assert_eq!(floored(centre, 0.97 * rho0), summed(centre), "packed closer than its density says");
+    assert_eq!(floored(centre, 1.02 * rho0), 1.02 * rho0, "denser than its packing");
+    assert_eq!(floored(face, rho0), rho0, "a free surface keeps its density");
+}

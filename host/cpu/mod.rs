@@ -16,7 +16,7 @@ use coil_kernels::acceleration::{acceleration_pass, AccelerationArgs};
 use coil_kernels::cell_grid::Neighbors;
 use coil_kernels::continuity_molteni2009::{continuity_pass, density_integration_pass, ContinuityArgs, DensityIntegrationArgs};
 use coil_kernels::cross_viscosity::Rheology;
-use coil_kernels::density::{density_pass, wall_density_pass, DensityArgs, DensityKernel, Spiky};
+use coil_kernels::density::{continuity_floor_pass, density_pass, DensityArgs, DensityKernel, Spiky};
 use coil_kernels::dfsph_bender2017::{
     density_error_pass, density_rate_pass, divergence_error_pass, error_sum_pass, factor_pass, pressure_change_pass,
     warm_start_pass, DensityErrorArgs, DensityRateArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs,
@@ -235,8 +235,8 @@ impl<R: Real, T: Topology, N: Neighbors + Sync> Passes<R, T, N> for CpuPasses {
     fn continuity<K: DensityKernel>(&mut self, args: ContinuityArgs<'_, R, N>) {
         launch(self.n, |i| continuity_pass::<R, K, N>(i, &args));
     }
-    fn wall_density(&mut self, args: DensityArgs<'_, R, N>) {
-        launch(self.n, |i| wall_density_pass::<R, Spiky, N>(i, &args));
+    fn continuity_floor(&mut self, args: DensityArgs<'_, R, N>) {
+        launch(self.n, |i| continuity_floor_pass::<R, Spiky, N>(i, &args));
     }
     fn density_integration(&mut self, args: DensityIntegrationArgs<'_, R>) {
         launch(self.n, |i| density_integration_pass(i, &args));

@@ -370,8 +370,8 @@ impl<R: Real, T: Topology> Passes<R, T, Neighborhood<'static, T>> for GpuPasses<
     fn continuity<K: DensityKernel>(&mut self, args: ContinuityArgs<'_, R, Neighborhood<'static, T>>) {
         self.run(kernel::<R>("continuity", K::NAME, T::NAME), args);
     }
-    fn wall_density(&mut self, args: DensityArgs<'_, R, Neighborhood<'static, T>>) {
-        self.run(kernel::<R>("wall_density", Spiky::NAME, T::NAME), args);
+    fn continuity_floor(&mut self, args: DensityArgs<'_, R, Neighborhood<'static, T>>) {
+        self.run(kernel::<R>("continuity_floor", Spiky::NAME, T::NAME), args);
     }
     fn density_integration(&mut self, args: DensityIntegrationArgs<'_, R>) {
         self.run(kernel::<R>("density_integration", "", ""), args);

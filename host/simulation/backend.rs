@@ -40,8 +40,9 @@ use std::fmt::Display;
 pub trait Passes<R: Real, T: Topology, N: Neighbors> {
     fn density<K: DensityKernel>(&mut self, args: DensityArgs<'_, R, N>);
     fn continuity<K: DensityKernel>(&mut self, args: ContinuityArgs<'_, R, N>);
-    /// The walls' density with the spiky kernel, which the divergence-free solves require.
-    fn wall_density(&mut self, args: DensityArgs<'_, R, N>);
+    /// The walls' density, and the fluid's continuity density raised to its sum, with the
+    /// spiky kernel, which the divergence-free solves require.
+    fn continuity_floor(&mut self, args: DensityArgs<'_, R, N>);
     fn density_integration(&mut self, args: DensityIntegrationArgs<'_, R>);
     fn mirrored_wall(&mut self, args: MirroredWallArgs<'_, R, T>);
     fn stress<Rh: Rheology<R>, G: GradientEstimate>(&mut self, args: StressArgs<'_, R, Rh, G, N>);

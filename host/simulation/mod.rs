@@ -433,7 +433,8 @@ fn in_topology<R: Real, B: Backend<R>, S: Schedule<R>>(backend: &mut B, schedule
 
 /// Algorithm 1, lines 5-8: density (pressure is evaluated from it where it is read), or, with
 /// the continuity equation, the fluid's density rate and the walls' density; where pressure is
-/// solved on the continuity density, the walls' alone (the density solve predicts the rate).
+/// solved on the continuity density, the walls' density and the fluid's raised to its sum (the
+/// density solve predicts the rate).
 struct DensityPass<'r, R: Real, M: Model<R>> {
     run: &'r RunState<R, M>,
 }
@@ -462,7 +463,7 @@ fn density_with<R: Real, M: Model<R>, K: DensityKernel, T: Topology, N: Neighbor
 ) {
     let density_args = DensityArgs { neighborhood: v.neighbors, fluid: run.fluid, id: v.id, density: v.density };
     match v.density_rate {
-        Some(_) if run.pressure_solve.is_some() => passes.wall_density(density_args),
+        Some(_) if run.pressure_solve.is_some() => passes.continuity_floor(density_args),
         Some(density_rate) => passes.continuity::<K>(ContinuityArgs {
             neighborhood: v.neighbors,
             fluid: run.fluid,

@@ -19,7 +19,7 @@ use crate::counting_sort::{
     sum_chunk, Counters, ReorderArgs,
 };
 use crate::cross_viscosity::{Cross, Newtonian};
-use crate::density::{density_pass, wall_density_pass, DensityArgs, Poly6, Spiky};
+use crate::density::{continuity_floor_pass, density_pass, DensityArgs, Poly6, Spiky};
 use crate::dfsph_bender2017::{
     density_error_pass, density_rate_pass, divergence_error_pass, error_sum_pass, factor_pass, pressure_change_pass,
     warm_start_pass, DensityErrorArgs, DensityRateArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs,
@@ -193,16 +193,16 @@ per_neighborhood_kernels!(density_f64, density_periodic_f64, DensityArgs<f64>, d
 per_neighborhood_kernels!(density_spiky_f32, density_spiky_periodic_f32, DensityArgs<f32>, density_pass<f32, Spiky>);
 per_neighborhood_kernels!(density_spiky_f64, density_spiky_periodic_f64, DensityArgs<f64>, density_pass<f64, Spiky>);
 per_neighborhood_kernels!(
-    wall_density_spiky_f32,
-    wall_density_spiky_periodic_f32,
+    continuity_floor_spiky_f32,
+    continuity_floor_spiky_periodic_f32,
     DensityArgs<f32>,
-    wall_density_pass<f32, Spiky>
+    continuity_floor_pass<f32, Spiky>
 );
 per_neighborhood_kernels!(
-    wall_density_spiky_f64,
-    wall_density_spiky_periodic_f64,
+    continuity_floor_spiky_f64,
+    continuity_floor_spiky_periodic_f64,
     DensityArgs<f64>,
-    wall_density_pass<f64, Spiky>
+    continuity_floor_pass<f64, Spiky>
 );
 per_neighborhood_kernels!(continuity_f32, continuity_periodic_f32, ContinuityArgs<f32>, continuity_pass<f32, Poly6>);
 per_neighborhood_kernels!(continuity_f64, continuity_periodic_f64, ContinuityArgs<f64>, continuity_pass<f64, Poly6>);
@@ -768,10 +768,10 @@ pub const ENTRIES: &[(&str, Emulated)] = {
         density_spiky_periodic_f32,
         density_spiky_f64,
         density_spiky_periodic_f64,
-        wall_density_spiky_f32,
-        wall_density_spiky_periodic_f32,
-        wall_density_spiky_f64,
-        wall_density_spiky_periodic_f64,
+        continuity_floor_spiky_f32,
+        continuity_floor_spiky_periodic_f32,
+        continuity_floor_spiky_f64,
+        continuity_floor_spiky_periodic_f64,
         continuity_f32,
         continuity_periodic_f32,
         continuity_f64,
