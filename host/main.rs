@@ -40,6 +40,18 @@ fn colour_range(range: Option<&[f64]>) -> Result<Option<(f64, f64)>, String> {
     }
 }
 
+/// The overrides of `--variant NAME` (the variant's list in the scene file) followed by `set`.
+fn with_variant(path: &Path, variant: Option<&str>, set: Vec<String>) -> Result<Vec<String>, String> {
+    let Some(name) = variant else { return Ok(set) };
+    let scene = Scene::load(path).map_err(|e| e.to_string())?;
+    let Some(found) = scene.variants.iter().find(|v| v.name == name) else {
+        let names: Vec<&str> = scene.variants.iter().map(|v| v.name.as_str()).collect();
+        let known = if names.is_empty() { "it has none".to_string() } else { format!("it has {}", names.join(", ")) };
+        return Err(format!("{}: --variant {name}: the scene has no such variant; {known}", path.display()));
+    };
+    Ok(found.set.iter().cloned().chain(set).collect())
+}
+
 /// Reads a scene and applies its `--set` overrides, validating the result.
 fn load_scene(path: &Path, set: &[String]) -> Result<Scene, String> {
     let overrides = set.iter().map(|o| Override::parse(o)).collect::<Result<Vec<_>, _>>().map_err(|e| e.to_string())?;
@@ -148,10 +160,10 @@ fn command(command: Command) -> Result<ExitCode, String> {
             };
             bench_command(&options, &out).map(|()| ExitCode::SUCCESS)
         }
-        Command::Check { scene, set, precision, threads, calibrate_s } => {
+        Command::Check { scene, set, variant, precision, threads, calibrate_s } => {
             let file = scene.display().to_string();
             set_threads(threads)?;
-            let parsed = load_scene(&scene, &set)?;
+            let parsed = load_scene(&scene, &with_variant(&scene, variant.as_deref(), set)?)?;
             let calibration = std::time::Duration::from_secs_f64(calibrate_s.clamp(0.0, 600.0));
             let report = check(&parsed, &file, precision.map(PrecisionArg::precision), calibration).map_err(|e| e.to_string())?;
             println!("{file}: valid\n{report}");
@@ -171,13 +183,26 @@ fn command(command: Command) -> Result<ExitCode, String> {
             println!("{}", preview(&frame, view, coloring, range, size, output)?.display());
             Ok(ExitCode::SUCCESS)
         }
-        Command::Run { scene, set, out, precision, execution: Execution { backend, threads, quiet, preview }, overwrite } => {
+        Command::Run {
+            scene,
+            set,
+            variant,
+            out,
+            precision,
+            execution: Execution { backend, threads, quiet, preview },
+            overwrite,
+        } => {
             let file = scene.display().to_string();
             set_threads(threads)?;
+            let set = with_variant(&scene, variant.as_deref(), set)?;
             let parsed = load_scene(&scene, &set)?;
+            let folder = match &variant {
+                Some(name) => format!("{}-{name}", parsed.name),
+                None => parsed.name.clone(),
+            };
             let options = RunOptions {
                 backend: backend.backend(),
-                out_dir: out.unwrap_or_else(|| PathBuf::from("out").join(&parsed.name)),
+                out_dir: out.unwrap_or_else(|| PathBuf::from("out").join(folder)),
                 precision: precision.map(PrecisionArg::precision),
                 quiet,
                 preview,

@@ -494,21 +494,53 @@ fn an_output_folder_that_cannot_be_created_exits_2_naming_it() {
     std::fs::remove_file(&file).ok();
 }
 
-/// `coil scenes` prints each variant's command with an output folder of its own, named after
-/// the scene and the variant, so that running one variant after another is not refused.
+/// `coil scenes` prints each variant's command as `coil run SCENE --variant NAME`, and such a
+/// run writes to an output folder of its own, named after the scene and the variant, so that
+/// running one variant after another is not refused.
 #[test]
 fn coil_scenes_gives_each_variant_its_own_output_folder() {
     let out = common::coil(&["scenes", concat!(env!("CARGO_MANIFEST_DIR"), "/scenes")]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let printed = String::from_utf8_lossy(&out.stdout);
-    let folders: Vec<&str> = printed.lines().filter_map(|l| l.split(" --out ").nth(1)).collect();
-    assert!(folders.contains(&"out/round_jet-paper") && folders.contains(&"out/newtonian_jet-paper"), "{printed}");
-    let mut unique = folders.clone();
-    unique.sort();
-    unique.dedup();
-    assert_eq!(unique.len(), folders.len(), "{printed}");
-    let runs = printed.lines().filter(|l| l.trim_start().starts_with("coil run ")).count();
-    assert_eq!(runs, folders.len(), "{printed}");
+    let runs: Vec<&str> = printed.lines().map(str::trim_start).filter(|l| l.starts_with("coil run ")).collect();
+    let variants: Vec<&str> = runs.iter().filter_map(|l| l.split(" --variant ").nth(1)).collect();
+    assert_eq!(variants.len(), runs.len(), "{printed}");
+    let jet = concat!("coil run ", env!("CARGO_MANIFEST_DIR"), "/scenes/newtonian_jet.toml --variant divergence_free");
+    assert!(runs.contains(&jet), "{printed}");
+    let dir = std::env::temp_dir().join(format!("coil-variants-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temporary folder");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/newtonian_jet.toml");
+    let short = ["--set", "simulation.end_time_s=0.002", "--set", "output.every_s=0.002", "--quiet"];
+    for variant in ["paper", "divergence_free"] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_coil"))
+            .args(["run", scene, "--variant", variant])
+            .args(short)
+            .current_dir(&dir)
+            .output()
+            .expect("coil runs");
+        assert!(out.status.success(), "{variant}: {}", String::from_utf8_lossy(&out.stderr));
+        let log = dir.join(format!("out/newtonian_jet-{variant}/run.json"));
+        let text = std::fs::read_to_string(&log).unwrap_or_else(|e| panic!("{}: {e}", log.display()));
+        let overrides = text.split("\"overrides\"").nth(1).and_then(|t| t.split(']').next()).expect("overrides logged");
+        assert!(overrides.contains("simulation.particle_shifting=0") == (variant == "paper"), "{variant}: {overrides}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// An unknown `--variant` is bad input: exit 2, naming the scene file, the variant and the
+/// variants the scene has.
+#[test]
+fn an_unknown_variant_is_refused_naming_the_ones_there_are() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/newtonian_jet.toml");
+    for command in ["run", "check"] {
+        let out = common::coil(&[command, scene, "--variant", "papr"]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{command}: {stderr}");
+        assert!(
+            stderr.contains("newtonian_jet.toml") && stderr.contains("--variant papr") && stderr.contains("laplacian, paper"),
+            "{command}: {stderr}"
+        );
+    }
 }
 
 /// `coil scenes | head -1`: once the reader of stdout has gone, coil ends as Unix filters do

@@ -46,6 +46,10 @@ pub enum Command {
         /// Repeatable; applied in order.
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
+        /// Apply the scene's variant NAME first (its list of fields, as `coil scenes` prints
+        /// it), then any --set; the output folder defaults to out/<scene name>-<NAME>.
+        #[arg(long, value_name = "NAME")]
+        variant: Option<String>,
         /// Output folder [default: out/<scene name>].
         #[arg(long)]
         out: Option<PathBuf>,
@@ -175,6 +179,9 @@ pub enum Command {
         /// Override a scene field, as for `run`.
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
+        /// Apply the scene's variant NAME first, as for `run`.
+        #[arg(long, value_name = "NAME")]
+        variant: Option<String>,
         /// Floating-point precision [default: the scene's].
         #[arg(long, value_enum)]
         precision: Option<PrecisionArg>,

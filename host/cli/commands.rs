@@ -185,17 +185,7 @@ pub fn list_scenes(dir: &Path) -> Result<ExitCode, String> {
             Ok(scene) => {
                 println!("{:<32} {}", path.display(), scene.description);
                 for v in &scene.variants {
-                    let sets: String = v.set.iter().map(|s| format!(" --set {s}")).collect();
-                    // Its own folder, so that variants of one scene do not refuse each other's.
-                    let out = Path::new("out").join(format!("{}-{}", scene.name, v.name));
-                    println!(
-                        "  {:<30} {}\n  {:<30} coil run {}{sets} --out {}",
-                        v.name,
-                        v.description,
-                        "",
-                        path.display(),
-                        out.display()
-                    );
+                    println!("  {:<30} {}\n  {:<30} coil run {} --variant {}", v.name, v.description, "", path.display(), v.name);
                 }
             }
             Err(e) => {
