@@ -124,7 +124,7 @@ pub fn quiet_run_options(out: &std::path::Path) -> coil::run::RunOptions {
 }
 
 /// Runs `coil run scenes/newtonian_jet.toml` into `out` with divergence-free pressure and
-/// implicit viscosity (the settings of its `divergence_free` variant but the viscosity
+/// implicit viscosity (the settings of its `divergence_free_summed` variant but the viscosity
 /// tolerance) and the `extra` settings.
 pub fn run_divergence_free_jet(out: &std::path::Path, extra: &[&str]) -> Output {
     let sets = [
