@@ -369,8 +369,8 @@ pub fn calibrated_mass(rest_density: f64, spacing: f64, support_radius: f64, ker
 /// the exit from 1 to 1.6 m/s. Where pressure is solved on the continuity density it is a
 /// lattice cell as well: the kernels are calibrated on that lattice with volumes m / rho0
 /// (`calibrated_kernels`), and on the lattice of cells m / rho0, 0.93 spacings, their gradients
-/// read 1.24 times a linear field's, so that the viscous force, two gradients, was 1.5 times
-/// the liquid's there; the walls, on the lattice, then also pack as the fluid does. Where the
+/// read 1.24 times a linear field's, and the viscous force, two gradients, about 1.5 times the
+/// liquid's; on the lattice the fluid also packs as the walls do. Where the
 /// continuity density meets the equation of state each particle starts at rho0 and its volume
 /// is m / rho0.
 pub fn rest_volume(scene: &Scene, mass: f64) -> f64 {
