@@ -4,6 +4,7 @@ pub mod bench;
 pub mod cpu;
 pub mod cuda;
 pub mod output;
+pub mod regular_file;
 pub mod run;
 pub mod scene;
 pub mod simulation;

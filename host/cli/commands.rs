@@ -3,8 +3,9 @@
 use coil::bench::report::{chart, csv, kernels_csv, markdown};
 use coil::bench::{bench, precision_name, BenchOptions};
 use coil::output::preview::{frame_path, render_frame, Coloring, View};
-use coil::output::vtu_read::read_frame;
+use coil::output::vtu_read::{read_frame, read_run_frame};
 use coil::output::write_atomically;
+use coil::run::folder::LOG;
 use coil::run::{RunError, Summary};
 use coil::scene::{Scene, ViscousVelocity};
 use coil::validation::jet_axis::{AxisSample, JetAxis};
@@ -210,7 +211,12 @@ pub fn preview(
         return Err(format!("--size: must be 16 to 8192 pixels, got {size}"));
     }
     let file = frame_path(path)?;
-    let frame = read_frame(&file)?;
+    // In a run's folder the frame is checked against the run's domain as well.
+    let log = file.parent().map(|dir| dir.join(LOG)).filter(|log| log.is_file());
+    let frame = match log {
+        Some(log) => read_run_frame(&file, &Scene::load(&log).map_err(|e| e.to_string())?)?,
+        None => read_frame(&file)?,
+    };
     let image = render_frame(&frame, view, coloring, range, size).map_err(|e| format!("{}: {e}", file.display()))?;
     let png = output.unwrap_or_else(|| file.with_extension("png"));
     image.save(&png).map_err(|e| format!("{}: cannot be written: {e}", png.display()))?;

@@ -4,7 +4,7 @@
 use super::surface::frames_of;
 use coil::output::pov::PovStage;
 use coil::output::preview::speeds;
-use coil::output::vtu_read::{read_frame, FrameData};
+use coil::output::vtu_read::{read_run_frame, FrameData};
 use coil::output::write_atomically;
 use coil::run::folder::LOG;
 use coil::scene::Scene;
@@ -26,7 +26,7 @@ pub struct PovOptions {
 pub fn pov_command(path: &Path, options: &PovOptions) -> Result<(), String> {
     let (dir, files) = frames_of(path)?;
     let scene = Scene::load_with(&dir.join(LOG), &[]).map_err(|e| e.to_string())?;
-    let frames = files.par_iter().map(|f| read_frame(f)).collect::<Result<Vec<FrameData>, String>>()?;
+    let frames = files.par_iter().map(|f| read_run_frame(f, &scene)).collect::<Result<Vec<FrameData>, String>>()?;
     let viscosity = &scene.material.viscosity;
     let by_viscosity = options.by_viscosity.unwrap_or(viscosity.nu_inf() < viscosity.nu0_m2_s);
     let values: Vec<Vec<f32>> = frames

@@ -4,7 +4,7 @@
 use super::surface::frames_of;
 use coil::output::render::{Camera, Stage};
 use coil::output::surface::{reconstruct, Fluid, SurfaceMesh, SurfaceParameters};
-use coil::output::vtu_read::{read_frame, read_series};
+use coil::output::vtu_read::{read_run_frame, read_series};
 use coil::output::write_atomically;
 use coil::run::folder::{series_path, LOG, MOVIE, MOVIE_MP4};
 use coil::scene::{Boundary, Scene};
@@ -96,7 +96,7 @@ pub fn render_command(path: &Path, options: &RenderOptions) -> Result<(), String
     let meshes = frames
         .par_iter()
         .map(|file| {
-            let frame = read_frame(file)?;
+            let frame = read_run_frame(file, &scene)?;
             let mesh = Fluid::of(&frame)
                 .and_then(|fluid| reconstruct(fluid, &parameters))
                 .map_err(|e| format!("{}: {e}", file.display()))?;

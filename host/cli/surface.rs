@@ -1,7 +1,7 @@
 //! `coil surface`: the free-surface mesh of each frame of a run, written beside the frame.
 
 use coil::output::surface::{mesh_path, reconstruct, Fluid, MeshFormat, SurfaceParameters};
-use coil::output::vtu_read::{read_frame, read_series};
+use coil::output::vtu_read::{read_run_frame, read_series};
 use coil::output::write_atomically;
 use coil::run::folder::{series_path, LOG};
 use coil::scene::Scene;
@@ -68,7 +68,7 @@ pub fn surface_command(path: &Path, options: &SurfaceOptions) -> Result<(), Stri
     let triangles = frames
         .par_iter()
         .map(|frame_file| {
-            let frame = read_frame(frame_file)?;
+            let frame = read_run_frame(frame_file, &scene)?;
             let mesh = Fluid::of(&frame)
                 .and_then(|fluid| reconstruct(fluid, &parameters))
                 .map_err(|e| format!("{}: {e}", frame_file.display()))?;

@@ -3,6 +3,7 @@
 //! and the round-trip test. Other VTK writers' files are refused with a reason rather than
 //! misread.
 
+use crate::scene::Scene;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -37,16 +38,54 @@ fn attribute(tag: &str, name: &str) -> Option<String> {
     Some(tag[start..end].to_string())
 }
 
-/// Reads a frame file; the error says why it cannot be read.
+/// The largest frame file read (bytes): a frame of a billion particles.
+pub const MAX_FRAME_BYTES: u64 = 1 << 36;
+/// The largest `.pvd` series read (bytes): a run writes at most 1e5 frames, under 100 bytes each
+/// in its series.
+const MAX_SERIES_BYTES: u64 = 64 << 20;
+
+/// Reads a frame file; the error names the file and says why it cannot be read.
 pub fn read_frame(path: &Path) -> Result<FrameData, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("{}: cannot be read: {e}", path.display()))?;
+    let bytes =
+        crate::regular_file::read(path, MAX_FRAME_BYTES).map_err(|e| format!("{}: cannot be read: {e}", path.display()))?;
     parse(&bytes).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Reads a frame of the run of `scene` (as its `run.json` logs it): beyond [`read_frame`]'s
+/// checks, every particle must lie in the run's domain, where a run keeps its particles (a
+/// particle that leaves it is removed), within one support radius.
+pub fn read_run_frame(path: &Path, scene: &Scene) -> Result<FrameData, String> {
+    let frame = read_frame(path)?;
+    let margin = scene.support_radius();
+    let d = &scene.domain;
+    let outside =
+        frame.position.iter().position(|p| (0..3).any(|a| !(p[a] >= d.min_m[a] - margin && p[a] <= d.max_m[a] + margin)));
+    match outside {
+        Some(k) => Err(format!(
+            "{}: {} lies at {:?} m, outside the run's domain {:?} to {:?} m: not a frame of this run",
+            path.display(),
+            particle_name(&frame, k),
+            frame.position[k],
+            d.min_m,
+            d.max_m
+        )),
+        None => Ok(frame),
+    }
+}
+
+/// "particle K (id I)", or "particle K" in a frame without ids.
+fn particle_name(frame: &FrameData, k: usize) -> String {
+    match frame.id.get(k) {
+        Some(id) => format!("particle {k} (id {id})"),
+        None => format!("particle {k}"),
+    }
 }
 
 /// The frames a `.pvd` series lists, in its order: (simulated time (s), file name relative to
 /// the series).
 pub fn read_series(path: &Path) -> Result<Vec<(f64, String)>, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: cannot be read: {e}", path.display()))?;
+    let text =
+        crate::regular_file::read_text(path, MAX_SERIES_BYTES).map_err(|e| format!("{}: cannot be read: {e}", path.display()))?;
     text.split("<DataSet")
         .skip(1)
         .map(|tag| {
@@ -80,6 +119,11 @@ pub fn parse(bytes: &[u8]) -> Result<FrameData, String> {
         .and_then(|p| attribute(&header[p..], "NumberOfPoints"))
         .and_then(|v| v.parse().ok())
         .ok_or("no NumberOfPoints")?;
+    // Each point takes 24 bytes of positions at least (more in base64): a header that claims
+    // more points than that is refused before anything is sized by it.
+    if n > bytes.len() / 24 {
+        return Err(format!("claims {n} points, more than its {} bytes can hold", bytes.len()));
+    }
     let arrays: Vec<ArrayHeader> = header
         .split("<DataArray")
         .skip(1)
@@ -103,10 +147,15 @@ pub fn parse(bytes: &[u8]) -> Result<FrameData, String> {
         })
         .collect::<Result<_, &str>>()?;
     let block = |a: &ArrayHeader, size: usize| -> Result<Vec<u8>, String> {
-        let expected = n * a.components * size;
+        let expected = n
+            .checked_mul(a.components)
+            .and_then(|v| v.checked_mul(size))
+            .filter(|&e| e <= bytes.len())
+            .ok_or(format!("array {} claims more bytes than the file holds", a.name))?;
         let (len, block) = match a.place {
             Place::Appended(offset) => {
-                let len_bytes = data.get(offset..offset + 8).ok_or(format!("array {} lies past the end of the file", a.name))?;
+                let past = || format!("array {} lies past the end of the file", a.name);
+                let len_bytes = data.get(offset..offset.checked_add(8).ok_or_else(past)?).ok_or_else(past)?;
                 let len = u64::from_le_bytes(len_bytes.try_into().expect("8 bytes")) as usize;
                 (
                     len,
@@ -161,5 +210,27 @@ pub fn parse(bytes: &[u8]) -> Result<FrameData, String> {
     if frame.position.len() != n {
         return Err("no Float64 position array".into());
     }
+    if let Some(what) = first_non_finite(&frame) {
+        return Err(format!("{what}: a coil run writes only finite values"));
+    }
     Ok(frame)
+}
+
+/// The first value of `frame` that is not finite, as "the NAME of particle K (id I) is V".
+fn first_non_finite(frame: &FrameData) -> Option<String> {
+    let at = |name: &str, k: usize, value: String| Some(format!("the {name} of {} is {value}", particle_name(frame, k)));
+    if let Some(k) = frame.position.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
+        return at("position", k, format!("{:?}", frame.position[k]));
+    }
+    for (name, values) in &frame.scalars {
+        if let Some(k) = values.iter().position(|x| !x.is_finite()) {
+            return at(name, k, values[k].to_string());
+        }
+    }
+    for (name, values) in &frame.vectors {
+        if let Some(k) = values.iter().position(|v| !v.iter().all(|x| x.is_finite())) {
+            return at(name, k, format!("{:?}", values[k]));
+        }
+    }
+    None
 }

@@ -270,7 +270,8 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
     }
     let scene = Scene::from_log(&log, &log_path, &overrides).map_err(RunError::Scene)?;
     let checkpoint_path = dir.join(folder::CHECKPOINT);
-    if !checkpoint_path.is_file() {
+    // Anything at the path is read, and refused there if it is not a regular file.
+    if !checkpoint_path.exists() {
         return Err(bad(
             &checkpoint_path,
             "(file)",
@@ -322,7 +323,7 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
 fn verify_frames(dir: &Path, files: &[summary::WrittenFile], log: &RunLog) -> Result<(), RunError> {
     for file in files {
         let path = dir.join(&file.name);
-        let problem = match std::fs::read(&path) {
+        let problem = match crate::regular_file::read(&path, file.bytes) {
             Err(e) => format!("cannot be read: {e}"),
             Ok(bytes) if bytes.len() as u64 != file.bytes => {
                 format!("holds {} bytes where the run wrote {}", bytes.len(), file.bytes)

@@ -76,8 +76,8 @@ impl RunLog {
     pub fn read(path: &Path) -> Result<RunLog, SceneError> {
         let file = path.display().to_string();
         let bad = |field: String, reason: String| SceneError { file: file.clone(), field, reason };
-        let text =
-            crate::scene::read_bounded(path, MAX_LOG_BYTES).map_err(|e| bad("(file)".into(), format!("cannot be read: {e}")))?;
+        let text = crate::regular_file::read_text(path, MAX_LOG_BYTES)
+            .map_err(|e| bad("(file)".into(), format!("cannot be read: {e}")))?;
         let json = &mut serde_json::Deserializer::from_str(&text);
         serde_path_to_error::deserialize(json).map_err(|e| {
             let field = e.path().to_string();

@@ -829,7 +829,7 @@ fn scene_text(path: &Path) -> Result<String, SceneError> {
     if path.extension().is_some_and(|x| x == "json") {
         return logged_scene_text(&crate::run::run_log::RunLog::read(path)?, path);
     }
-    read_bounded(path, MAX_SCENE_BYTES).map_err(|e| SceneError {
+    crate::regular_file::read_text(path, MAX_SCENE_BYTES).map_err(|e| SceneError {
         file: path.display().to_string(),
         field: "(file)".into(),
         reason: format!("cannot be read: {e}"),
@@ -838,18 +838,6 @@ fn scene_text(path: &Path) -> Result<String, SceneError> {
 
 /// The largest scene file read (bytes): the shipped scenes are about 2 KiB.
 pub const MAX_SCENE_BYTES: u64 = 1 << 20;
-
-/// A text file of at most `limit` bytes; a longer one (or an endless one, as `/dev/zero`) is
-/// an error without reading past the limit.
-pub fn read_bounded(path: &Path, limit: u64) -> std::io::Result<String> {
-    use std::io::Read;
-    let mut text = String::new();
-    std::fs::File::open(path)?.take(limit + 1).read_to_string(&mut text)?;
-    if text.len() as u64 > limit {
-        return Err(std::io::Error::other(format!("longer than {limit} bytes, the most read")));
-    }
-    Ok(text)
-}
 
 /// The scene a run log holds, as TOML; `path` names the log in errors.
 fn logged_scene_text(log: &crate::run::run_log::RunLog, path: &Path) -> Result<String, SceneError> {

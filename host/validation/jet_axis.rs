@@ -4,7 +4,7 @@
 //! in the frames of any finished run, so that a jet run with other parameters is judged the same
 //! way.
 
-use crate::output::vtu_read::{read_frame, read_series};
+use crate::output::vtu_read::{read_run_frame, read_series};
 use crate::run::folder::{series_path, LOG};
 use crate::scene::{Boundary, FrameFormat, Nozzle, Scene, SceneError};
 use std::path::Path;
@@ -125,7 +125,7 @@ pub fn offsets_in_run(dir: &Path) -> Result<(JetAxis, Vec<AxisSample>), String> 
     let mut offsets = Vec::with_capacity(frames.len());
     for (t, file) in frames {
         let path = dir.join(&file);
-        let frame = read_frame(&path)?;
+        let frame = read_run_frame(&path, &scene)?;
         let velocity = frame.vectors.get("velocity").ok_or_else(|| format!("{}: holds no velocity", path.display()))?;
         let particles = frame.position.iter().zip(velocity).map(|(&p, v)| (p, f64::from(v[1])));
         let displacement_over_d = axis.displacement(particles).map(|xz| xz.map(|c| c / axis.diameter_m));
