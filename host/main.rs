@@ -22,11 +22,19 @@ use coil::validation::jet_axis::offsets_in_run;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+/// Threads a core may be given at most: past a few a core, threads only wait for each other,
+/// and thousands would take the machine's memory and time before the first step.
+const THREADS_PER_CORE: usize = 4;
+
 /// Sizes rayon's pool; `None` keeps one thread per core.
 fn set_threads(threads: Option<usize>) -> Result<(), String> {
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    let most = THREADS_PER_CORE * cores;
     match threads {
         None => Ok(()),
-        Some(0) => Err("--threads: must be at least 1".into()),
+        Some(t) if !(1..=most).contains(&t) => Err(format!(
+            "--threads: must be from 1 to {most} ({THREADS_PER_CORE} for each of this machine's {cores} cores), got {t}"
+        )),
         Some(t) => rayon::ThreadPoolBuilder::new().num_threads(t).build_global().map_err(|e| format!("--threads: {e}")),
     }
 }

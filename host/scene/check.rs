@@ -1,7 +1,7 @@
 //! `coil check`: what a scene will cost before it runs. Counts, h, the Eq. (10) bound and its
 //! limiting term, memory, and a wall-time estimate from a short calibration run on this machine.
 
-use crate::scene::setup::{fastest_start_speed, initial_particles, InitialParticles};
+use crate::scene::setup::{initial_particles, InitialParticles};
 use crate::scene::{Boundary, Domain, FluidBlock, Precision, Pressure, Scene, SceneError};
 use crate::simulation::backend::Backend as _;
 use crate::simulation::inlet::Inlet;
@@ -115,20 +115,14 @@ impl fmt::Display for Report {
     }
 }
 
-/// The fastest a fluid particle can move (m/s) when all the height it can fall is turned into
-/// speed: the fastest jet or initial speed U, and free fall g through the domain's extent
-/// along gravity, sqrt(U^2 + 2 g extent). Viscosity only slows it. `None` where gravity runs
-/// along a periodic axis.
-fn speed_bound(scene: &Scene, initial: &InitialParticles) -> Option<f64> {
-    let g = scene.material.gravity_m_s2;
-    let d = &scene.domain;
+/// The fastest a fluid particle can move (m/s) (`validate::fastest_speed`); `None` where
+/// gravity runs along a periodic axis, which bounds the fall by viscosity only.
+fn speed_bound(scene: &Scene) -> Option<f64> {
+    let (g, d) = (scene.material.gravity_m_s2, &scene.domain);
     if (0..3).any(|a| d.periodic[a] && g[a] != 0.0) {
         return None;
     }
-    let g_norm = g.iter().map(|c| c * c).sum::<f64>().sqrt();
-    let drop = if g_norm > 0.0 { (0..3).map(|a| g[a].abs() / g_norm * (d.max_m[a] - d.min_m[a])).sum::<f64>() } else { 0.0 };
-    let start = fastest_start_speed(scene, initial);
-    Some((start * start + 2.0 * g_norm * drop).sqrt())
+    Some(super::validate::fastest_speed(scene))
 }
 
 fn human(s: f64) -> String {
@@ -266,7 +260,7 @@ pub fn check(scene: &Scene, file: &str, precision: Option<Precision>, calibratio
     // the run can reach.
     let divergence_free = scene.simulation.pressure == Pressure::DivergenceFree;
     let bound = if divergence_free { bound.incompressible() } else { bound };
-    let speed_bound = speed_bound(scene, &initial);
+    let speed_bound = speed_bound(scene);
     let fastest = if divergence_free { speed_bound.unwrap_or(0.0) } else { 0.0 };
     let (dt, limit) = TimeStepper { bound, ..plan.stepper }.next(fastest);
     let end = scene.simulation.end_time_s;

@@ -49,6 +49,13 @@ impl Override {
             }
             path.push(step);
         }
+        // The variant is applied from the file before any override, so an edit of it would do
+        // nothing.
+        if matches!(&path[0], Step::Key(name) | Step::Index(name, _) if name == "variant") {
+            return Err(bad(
+                "`variant` lists the scene's variants, which --variant NAME applies before any --set: an override of it would do nothing".into(),
+            ));
+        }
         let value = match toml::from_str::<Table>(&format!("v = {value}")) {
             Ok(mut t) => t.remove("v").expect("the key just parsed"),
             // A number TOML cannot hold (1e400, 2^64) would otherwise be taken as a string.

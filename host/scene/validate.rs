@@ -1,22 +1,36 @@
 //! What a scene's values must mean, checked once at load: one validator per section, each
 //! refusing a value with the field named as `--set` spells it.
 
+use super::overrides::Override;
+use super::Variant;
 use super::{
-    short, Boundary, Domain, Material, Nozzle, NozzleMotion, Output, Scene, SceneError, VelocityGradient, ViscosityOperator,
-    ViscositySolver,
+    short, Boundary, Domain, InletSettings, Material, Nozzle, NozzleMotion, Output, Scene, SceneError, VelocityGradient,
+    ViscosityOperator, ViscositySolver,
 };
 use super::{
-    DensityEquation, DensityKernelKind, Precision, Pressure, SimulationSettings, ViscousVelocity, Walls, MAX_HOURGLASS_CONTROL,
-    MAX_PARTICLE_SHIFTING,
+    DensityEquation, DensityKernelKind, DivergenceFree, ImplicitViscosity, Precision, Pressure, SimulationSettings,
+    ViscousVelocity, Walls, MAX_HOURGLASS_CONTROL, MAX_PARTICLE_SHIFTING,
 };
 use crate::simulation::time_step::{Cfl, Limit, StabilityBound, TimeStepper};
+use toml::Value;
 
 /// Iterations an implicit solve may be allowed: a solve needing more at the chosen dt is
 /// better served by a smaller dt.
 const MAX_IMPLICIT_ITERATIONS: u32 = 10_000;
 /// The most Picard iterations a step may take.
 const MAX_PICARD_ITERATIONS: u32 = 100;
-use toml::Value;
+/// The smallest tolerance of a solve (the implicit viscosity's, and the pressure solves'): about
+/// 8 times f32's epsilon, below which rounding, not the solver, decides when a solve stops.
+const MIN_TOLERANCE: f64 = 1e-6;
+/// The relaxation of the pressure solves' Jacobi sweeps: above 2 / 2.65 = 0.755 they diverge
+/// on a lattice at h = 2 spacings; below 0.01 a sweep moves the pressure a hundredth of the way,
+/// and a solve needs hundreds.
+const RELAXATION: (f64, f64) = (0.01, 0.75);
+/// The CFL factor under solved pressure: at 1 the fastest particle crosses a spacing a step;
+/// below 1e-3 a step moves it a thousandth of one, and the run's steps are wasted.
+const CFL_FACTOR: (f64, f64) = (1e-3, 1.0);
+/// The largest `max_time_step_s` (s): the step that holds while the fluid is at rest.
+const MAX_TIME_STEP_S: f64 = 1.0;
 
 /// Rest densities a scene may give (kg/m^3): from a thin gas to past any liquid, so that the
 /// pressure c^2 rho0 and the pair terms m / rho^2 stay normal numbers in f32.
@@ -77,17 +91,24 @@ impl Scene {
             reason: format!("cannot be written out: {e}"),
         })?;
         check.array_lengths(given, &written)?;
-        check.name(&self.name)?;
+        check.name("name", &self.name)?;
+        check.variants(&self.variants)?;
         check.finite(&written)?;
         check.material(&self.material)?;
         self.check_precision(self.simulation.precision, file)?;
         check.domain(&self.domain, &self.material, self.support_radius())?;
         check.simulation(&self.simulation, &self.material, self.support_radius())?;
-        let (dt, _) = largest_dt(&self.simulation, &self.material, self.support_radius());
+        let (dt, _) = step_at(&self.simulation, &self.material, self.support_radius(), 0.0);
         check.output(&self.output, self.simulation.end_time_s, self.simulation.end_time_s / dt)?;
         check.fluid(self)?;
         check.boundaries(&self.boundaries, &self.domain)?;
-        check.inlets(self)
+        check.inlets(self)?;
+        // Solved pressure steps by the flow's speed: its steps are counted at the fastest the
+        // fluid, checked above, can move.
+        if self.simulation.pressure == Pressure::DivergenceFree {
+            check.steps(&self.simulation, &self.material, self.support_radius(), fastest_speed(self))?;
+        }
+        Ok(())
     }
 }
 
@@ -132,15 +153,38 @@ impl Check<'_> {
 
     /// The name becomes the output folder and the series' file name, so it must be a plain file
     /// name: nothing a path could climb out of the output folder with.
-    fn name(&self, name: &str) -> Checked {
+    fn name(&self, field: &str, name: &str) -> Checked {
         let plain = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.';
         if name.is_empty() || name.starts_with('.') || !name.chars().all(plain) || name.chars().count() > MAX_NAME_CHARS {
             return self.fail(
-                "name",
+                field,
                 format!(
                     "must be a plain file name of 1 to {MAX_NAME_CHARS} letters, digits, '_', '-' or '.', not starting with '.', got {name:?}"
                 ),
             );
+        }
+        Ok(())
+    }
+
+    /// A variant's name joins the output folder's (`out/<name>-<variant>`), so it is a plain
+    /// file name as the scene's is, and it picks one variant, so no two share it; each of its
+    /// overrides is a `KEY=VALUE` that `--set` would take.
+    fn variants(&self, variants: &[Variant]) -> Checked {
+        for (k, v) in variants.iter().enumerate() {
+            self.name(&format!("variant[{k}].name"), &v.name)?;
+            if let Some(j) = variants[..k].iter().position(|earlier| earlier.name == v.name) {
+                return self.fail(
+                    &format!("variant[{k}].name"),
+                    format!("{:?} is the name of variant[{j}] too; --variant picks one by its name", v.name),
+                );
+            }
+            for given in &v.set {
+                Override::parse(given).map_err(|e| SceneError {
+                    file: self.file.into(),
+                    field: format!("variant[{k}].set"),
+                    reason: format!("{given:?}: {}", e.reason),
+                })?;
+            }
         }
         Ok(())
     }
@@ -239,25 +283,35 @@ impl Check<'_> {
                         .into(),
                 );
             }
-            let t = v.implicit.tolerance;
-            if !(t > 0.0 && t < 1.0) {
-                return self.fail(
-                    "material.viscosity.implicit.tolerance",
-                    format!("must be above 0 and below 1 (a fraction of the first residual; 1e-3 is the default), got {t}"),
-                );
-            }
-            if !(1..=MAX_IMPLICIT_ITERATIONS).contains(&v.implicit.max_iterations) {
-                return self.fail(
-                    "material.viscosity.implicit.max_iterations",
-                    format!("must be from 1 to {MAX_IMPLICIT_ITERATIONS}, got {}", v.implicit.max_iterations),
-                );
-            }
-            if v.implicit.picard_iterations > MAX_PICARD_ITERATIONS {
-                return self.fail(
-                    "material.viscosity.implicit.picard_iterations",
-                    format!("must be from 0 to {MAX_PICARD_ITERATIONS}, got {}", v.implicit.picard_iterations),
-                );
-            }
+        }
+        self.implicit_viscosity(&v.implicit)
+    }
+
+    /// The implicit solve's settings, checked whichever solver the scene picks: a `--set` of
+    /// the solver must not bring an unchecked value to life.
+    fn implicit_viscosity(&self, i: &ImplicitViscosity) -> Checked {
+        if !(i.tolerance >= MIN_TOLERANCE && i.tolerance < 1.0) {
+            return self.fail(
+                "material.viscosity.implicit.tolerance",
+                format!(
+                    "must be from {} to below 1 (a fraction of the first residual; 1e-3 is the default, and below {} f32 rounding decides whether a solve converges), got {}",
+                    short(MIN_TOLERANCE),
+                    short(MIN_TOLERANCE),
+                    short(i.tolerance)
+                ),
+            );
+        }
+        if !(1..=MAX_IMPLICIT_ITERATIONS).contains(&i.max_iterations) {
+            return self.fail(
+                "material.viscosity.implicit.max_iterations",
+                format!("must be from 1 to {MAX_IMPLICIT_ITERATIONS}, got {}", i.max_iterations),
+            );
+        }
+        if i.picard_iterations > MAX_PICARD_ITERATIONS {
+            return self.fail(
+                "material.viscosity.implicit.picard_iterations",
+                format!("must be from 0 to {MAX_PICARD_ITERATIONS}, got {}", i.picard_iterations),
+            );
         }
         Ok(())
     }
@@ -313,6 +367,7 @@ impl Check<'_> {
         if s.pressure == Pressure::DivergenceFree {
             self.divergence_free(s, m)?;
         }
+        self.divergence_free_settings(&s.divergence_free)?;
         let ts = &s.time_step;
         self.positive("simulation.time_step.safety_factor", ts.safety_factor)?;
         if ts.safety_factor > 1.0 && !ts.allow_above_stability_bound {
@@ -339,11 +394,20 @@ impl Check<'_> {
                 );
             }
         }
-        let (dt, limit) = largest_dt(s, m, h);
+        self.steps(s, m, h, 0.0)
+    }
+
+    /// The steps to the end time at the dt of a run whose fastest particle moves at `speed_m_s`
+    /// (m/s) are at most [`MAX_STEPS`]; else the field that makes them so many is named.
+    fn steps(&self, s: &SimulationSettings, m: &Material, h: f64, speed_m_s: f64) -> Checked {
+        let ts = &s.time_step;
+        let (dt, limit) = step_at(s, m, h, speed_m_s);
         let steps = s.end_time_s / dt;
         if !(steps <= MAX_STEPS) {
             let field = match limit {
                 Limit::Fixed => "simulation.time_step.fixed_s",
+                Limit::Cfl => "simulation.divergence_free.cfl_factor",
+                Limit::Largest => "simulation.divergence_free.max_time_step_s",
                 _ if ts.safety_factor < 1.0 && steps * ts.safety_factor <= MAX_STEPS => "simulation.time_step.safety_factor",
                 _ => "simulation.end_time_s",
             };
@@ -384,10 +448,15 @@ impl Check<'_> {
                 "\"divergence_free\" predicts each density change with the spiky gradient, so the density it corrects must be summed with the spiky kernel (with poly6 a closed channel of fluid at rest blew up within 300 steps); set material.density_kernel = \"spiky\"".into(),
             );
         }
-        let d = &s.divergence_free;
-        let tolerance = "a fraction of rho0, from 1e-6 to 0.1";
-        self.within("simulation.divergence_free.density_tolerance", d.density_tolerance, (1e-6, 0.1), tolerance)?;
-        self.within("simulation.divergence_free.divergence_tolerance", d.divergence_tolerance, (1e-6, 0.1), tolerance)?;
+        Ok(())
+    }
+
+    /// The pressure solves' settings, checked whichever pressure the scene picks, as the
+    /// implicit viscosity's are.
+    fn divergence_free_settings(&self, d: &DivergenceFree) -> Checked {
+        let tolerance = "a fraction of rho0";
+        self.within("simulation.divergence_free.density_tolerance", d.density_tolerance, (MIN_TOLERANCE, 0.1), tolerance)?;
+        self.within("simulation.divergence_free.divergence_tolerance", d.divergence_tolerance, (MIN_TOLERANCE, 0.1), tolerance)?;
         if !(1..=MAX_IMPLICIT_ITERATIONS).contains(&d.max_iterations) {
             return self.fail(
                 "simulation.divergence_free.max_iterations",
@@ -400,12 +469,11 @@ impl Check<'_> {
                 format!("must be at most max_iterations ({}), got {}", d.max_iterations, d.min_iterations),
             );
         }
-        self.positive("simulation.divergence_free.relaxation", d.relaxation)?;
         self.within(
             "simulation.divergence_free.relaxation",
             d.relaxation,
-            (0.0, 0.75),
-            "dimensionless, above 0 and at most 0.75 (Jacobi sweeps diverge above 0.755)",
+            RELAXATION,
+            "dimensionless; Jacobi sweeps diverge above 0.755, and below 0.01 a sweep hardly moves the pressure",
         )?;
         if !(0.0..1.0).contains(&d.chebyshev_radius) {
             return self.fail(
@@ -416,9 +484,14 @@ impl Check<'_> {
                 ),
             );
         }
-        self.positive("simulation.divergence_free.cfl_factor", d.cfl_factor)?;
-        self.within("simulation.divergence_free.cfl_factor", d.cfl_factor, (0.0, 1.0), "dimensionless, above 0 and at most 1")?;
-        self.positive("simulation.divergence_free.max_time_step_s", d.max_time_step_s)
+        self.within(
+            "simulation.divergence_free.cfl_factor",
+            d.cfl_factor,
+            CFL_FACTOR,
+            "dimensionless, the particle spacings the fastest particle may move in a step",
+        )?;
+        self.positive("simulation.divergence_free.max_time_step_s", d.max_time_step_s)?;
+        self.within("simulation.divergence_free.max_time_step_s", d.max_time_step_s, (0.0, MAX_TIME_STEP_S), "s")
     }
 
     /// `steps`: the fewest steps the run can take (at its largest dt).
@@ -545,6 +618,14 @@ impl Check<'_> {
         let h = scene.support_radius();
         let inside = |p: [f64; 3]| scene.domain.contains(p);
         for (k, inlet) in scene.inlets.iter().enumerate() {
+            if let Some(j) = scene.inlets[..k].iter().position(|earlier| nozzles_overlap(earlier, inlet)) {
+                return self.fail(
+                    &format!("inlet[{k}]"),
+                    format!(
+                        "its nozzle overlaps that of inlet[{j}], moving alike, while both inject: the two would lay their particles on top of each other"
+                    ),
+                );
+            }
             let field = |f: &str| format!("inlet[{k}].{f}");
             self.positive(&field("speed_m_s"), inlet.speed_m_s)?;
             if inlet.speed_m_s > MAX_SPEED_M_S {
@@ -624,9 +705,25 @@ impl Check<'_> {
     }
 }
 
-/// The largest dt a run of these settings takes (s), and what sets it: the fixed dt, or the
-/// Eq. (10) bound times the safety factor (the velocity CFL only lowers it).
-fn largest_dt(s: &SimulationSettings, m: &Material, h: f64) -> (f64, Limit) {
+/// Whether nozzles `a` and `b` overlap while both inject: they move alike (both fixed, or on
+/// the same motion), their injection times overlap, and their exits are closer than the sum of
+/// their half-widths (a nozzle's exit lies within that distance of its centre whichever way it
+/// points).
+fn nozzles_overlap(a: &InletSettings, b: &InletSettings) -> bool {
+    let half_width = |i: &InletSettings| match i.nozzle {
+        Nozzle::Circle { radius_m } => radius_m,
+        Nozzle::Rectangle { width_m, depth_m } => 0.5 * width_m.hypot(depth_m),
+    };
+    let (a_stop, b_stop) = (a.stop_s.unwrap_or(f64::INFINITY), b.stop_s.unwrap_or(f64::INFINITY));
+    let together = a.start_s < b_stop && b.start_s < a_stop;
+    let distance = (0..3).map(|k| (a.position_m[k] - b.position_m[k]).powi(2)).sum::<f64>().sqrt();
+    a.motion == b.motion && together && distance < half_width(a) + half_width(b)
+}
+
+/// The dt a run of these settings takes (s) while its fastest particle moves at `speed_m_s`,
+/// and what sets it: the fixed dt, or the Eq. (10) bound times the safety factor, or under
+/// solved pressure the CFL step. At a speed of 0 it is the largest dt the run takes.
+fn step_at(s: &SimulationSettings, m: &Material, h: f64, speed_m_s: f64) -> (f64, Limit) {
     match s.time_step.fixed_s {
         Some(dt) => (dt, Limit::Fixed),
         None => {
@@ -637,9 +734,33 @@ fn largest_dt(s: &SimulationSettings, m: &Material, h: f64) -> (f64, Limit) {
                 spacing_m: m.particle_spacing_m,
                 largest_s: s.divergence_free.max_time_step_s,
             });
-            TimeStepper { bound, support_radius: h, safety_factor: s.time_step.safety_factor, fixed: None, cfl }.next(0.0)
+            TimeStepper { bound, support_radius: h, safety_factor: s.time_step.safety_factor, fixed: None, cfl }.next(speed_m_s)
         }
     }
+}
+
+/// The fastest the fluid of `scene` can move (m/s) with all the height it can fall turned into
+/// speed: its fastest jet or initial velocity U, and free fall g through the domain's extent
+/// along gravity, sqrt(U^2 + 2 g extent); along a periodic axis the free fall is left out, so
+/// the speed is a lower bound there.
+pub(super) fn fastest_speed(scene: &Scene) -> f64 {
+    let norm = |v: [f64; 3]| v.iter().map(|c| c * c).sum::<f64>().sqrt();
+    let start = scene
+        .inlets
+        .iter()
+        .map(|i| i.speed_m_s)
+        .chain(scene.fluid_blocks.iter().map(|b| norm(b.velocity_m_s)))
+        .chain(scene.fluid_tori.iter().map(|t| norm(t.velocity_m_s)))
+        .chain(scene.fluid_cylinders.iter().map(|c| norm(c.velocity_m_s)))
+        .fold(0.0, f64::max);
+    let (g, d) = (scene.material.gravity_m_s2, &scene.domain);
+    let g_norm = norm(g);
+    let drop = if g_norm > 0.0 && !(0..3).any(|a| d.periodic[a] && g[a] != 0.0) {
+        (0..3).map(|a| g[a].abs() / g_norm * (d.max_m[a] - d.min_m[a])).sum::<f64>()
+    } else {
+        0.0
+    };
+    (start * start + 2.0 * g_norm * drop).sqrt()
 }
 
 /// Eq. (10) for the scene, at the largest viscosity `nu` (m^2/s): without its acoustic term
