@@ -6,7 +6,8 @@
 //! the half step, ids and densities of the live particles in their current order (the next
 //! sort is stable in that order), where viscosity is solved implicitly the last step's viscous
 //! change of velocity (the next solve's first guess), the clock and dt of the last step, the diagnostics the next
-//! dt reads, each inlet's progress, and the frame schedule and running figures of the summary.
+//! dt reads, each inlet's progress, and the frame schedule and running figures of the summary
+//! (the solvers' iterations among them).
 //! Everything else (walls' mirror images, the grid, stresses, accelerations) is rebuilt from
 //! the scene or recomputed by the next step.
 //!
@@ -18,6 +19,7 @@ use super::summary::{Tally, WrittenFile};
 use crate::scene::Scene;
 use crate::simulation::model::Model;
 use crate::simulation::particles::Particles;
+use crate::simulation::run_state::SolveStatistics;
 use crate::simulation::time_step::Limit;
 use crate::simulation::{Diagnostics, RunState, Setup};
 use coil_kernels::Real;
@@ -27,25 +29,45 @@ const MAGIC: &[u8; 8] = b"COILCKPT";
 /// 2: the fingerprint hashes the [`PHYSICS`] fields only. 3: the frame files' sizes and
 /// digests. 4: a flag after the densities, then the implicit solve's viscous change where it
 /// is set (a version 3 checkpoint, which has neither, is read as unset). 5: then a flag and
-/// the pressure solves' stiffness sums where pressure is solved.
-const FORMAT_VERSION: u32 = 5;
+/// the pressure solves' stiffness sums where pressure is solved. 6: then the iterations of the
+/// run's implicit viscosity, divergence and density solves, which its summary reports.
+const FORMAT_VERSION: u32 = 6;
+
+/// The largest checkpoint read (bytes): a billion particles in f64.
+const MAX_CHECKPOINT_BYTES: u64 = 1 << 37;
 
 /// FNV-1a, 64 bits: the same value on every machine and Rust version, unlike std's hasher.
 pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
 }
 
-/// Fields of a scene that a resumed run may change ([`RESUMABLE`] as `--set` spells them): how
-/// far it runs, how it picks dt and how far it solves implicit viscosity (to get past an
-/// instability or an unconverged solve from the last good frame), and what it writes.
-pub const RESUMABLE: [&str; 5] =
-    ["simulation.end_time_s", "simulation.time_step", "simulation.divergence_free", "material.viscosity.implicit", "output"];
+/// Fields of a scene that a resumed run may change, as `--set` spells them (a section stands for
+/// every field in it): how far it runs, how it picks dt, and how far its solvers iterate (to get
+/// past an instability or an unconverged solve from the last good frame), and what it writes.
+/// The numerical controls of the solves change how closely a step meets the equations, not
+/// which equations: what a wall pushes with (`divergence_free.wall_pressure`) is physics, and
+/// stays.
+pub const RESUMABLE: [&str; 13] = [
+    "simulation.end_time_s",
+    "simulation.time_step",
+    "simulation.divergence_free.density_tolerance",
+    "simulation.divergence_free.divergence_tolerance",
+    "simulation.divergence_free.max_iterations",
+    "simulation.divergence_free.min_iterations",
+    "simulation.divergence_free.relaxation",
+    "simulation.divergence_free.chebyshev_radius",
+    "simulation.divergence_free.on_no_convergence",
+    "simulation.divergence_free.cfl_factor",
+    "simulation.divergence_free.max_time_step_s",
+    "material.viscosity.implicit",
+    "output",
+];
 
 /// The fields that fix what a step computes, as `--set` spells them: a checkpoint resumes only a
 /// scene that agrees with the one it was taken from on each (array sections as a whole). A field
 /// added to the scene joins this list only if it changes the physics, and must then be left out
 /// of the serialized scene at its default, so that checkpoints taken before it existed resume.
-pub const PHYSICS: [&str; 30] = [
+pub const PHYSICS: [&str; 32] = [
     "material.rest_density_kg_m3",
     "material.sound_speed_m_s",
     "material.clamp_negative_pressure",
@@ -71,6 +93,8 @@ pub const PHYSICS: [&str; 30] = [
     "simulation.max_fluid_particles",
     "simulation.walls",
     "simulation.particle_shifting",
+    "simulation.pressure",
+    "simulation.divergence_free.wall_pressure",
     "fluid_block",
     "fluid_torus",
     "fluid_cylinder",
@@ -213,6 +237,9 @@ pub struct Checkpoint {
     viscous_change: bool,
     /// Whether the pressure solves' stiffness sums follow.
     stiffness_sums: bool,
+    /// The implicit viscosity, divergence and density solves of the run so far (none counted
+    /// in a checkpoint before version 6).
+    solves: [SolveStatistics; 3],
     /// The format version the checkpoint was written in.
     version: u32,
     bytes: Vec<u8>,
@@ -287,6 +314,12 @@ pub fn encode<R: Real, M: Model<R>>(sim: &RunState<R, M>, p: &Particles<R>, scen
             w.reals(&sum[..n]);
         }
     }
+    for solves in [&sim.solves, &sim.divergence_solves, &sim.density_solves] {
+        w.u64(solves.steps);
+        w.u64(solves.iterations);
+        w.u32(solves.largest_iterations);
+        w.u64(solves.unconverged);
+    }
     let sum = fnv1a(&w.0);
     w.u64(sum);
     w.0
@@ -307,7 +340,7 @@ pub fn write<R: Real, M: Model<R>>(
 impl Checkpoint {
     /// Reads and checks `path`; the error says what is wrong with the file.
     pub fn read(path: &Path) -> Result<Self, String> {
-        let bytes = std::fs::read(path).map_err(|e| format!("cannot be read: {e}"))?;
+        let bytes = crate::regular_file::read(path, MAX_CHECKPOINT_BYTES).map_err(|e| format!("cannot be read: {e}"))?;
         Self::decode(bytes)
     }
 
@@ -322,8 +355,8 @@ impl Checkpoint {
         }
         let mut r = Reader { bytes: body, at: MAGIC.len() };
         let version = r.u32("the format version")?;
-        if version != FORMAT_VERSION && version != 3 {
-            return Err(format!("has format version {version}; this coil reads version {FORMAT_VERSION}"));
+        if !(3..=FORMAT_VERSION).contains(&version) {
+            return Err(format!("has format version {version}; this coil reads versions 3 to {FORMAT_VERSION}"));
         }
         let real_bytes = usize::from(r.u8("the precision")?);
         if real_bytes != 4 && real_bytes != 8 {
@@ -381,6 +414,15 @@ impl Checkpoint {
         if stiffness_sums {
             r.take(particles * 2 * real_bytes, "the pressure solves' stiffness sums")?;
         }
+        let mut solves = [SolveStatistics::default(); 3];
+        if version >= 6 {
+            for s in &mut solves {
+                s.steps = r.u64("the solves' iterations")?;
+                s.iterations = r.u64("the solves' iterations")?;
+                s.largest_iterations = r.u32("the solves' iterations")?;
+                s.unconverged = r.u64("the solves' iterations")?;
+            }
+        }
         if r.at != body.len() {
             return Err(format!("has {} bytes past its particles", body.len() - r.at));
         }
@@ -404,6 +446,7 @@ impl Checkpoint {
             particle_data,
             viscous_change,
             stiffness_sums,
+            solves,
             version,
             bytes,
         })
@@ -501,6 +544,7 @@ impl Checkpoint {
         sim.restore_clock(self.time, self.steps, self.previous_dt, self.last_dt, self.last_limit);
         sim.restore_counts(self.fluid_count, self.removed, self.injected, self.next_id, self.capacity_reached_at);
         sim.diagnostics = self.diagnostics;
+        [sim.solves, sim.divergence_solves, sim.density_solves] = self.solves;
         Ok(())
     }
 }
