@@ -6,7 +6,7 @@ mod common;
 use coil::run::RunError;
 use coil::scene::particle_limit::ParticleLimit;
 use coil::scene::setup::{initial_particles, initial_particles_within};
-use coil::scene::{Scene, SceneError};
+use coil::scene::{Nozzle, Scene, SceneError};
 use coil_kernels::velocity_gradient::KernelSum;
 use common::{coil, quiet_run_options, set};
 use std::path::{Path, PathBuf};
@@ -222,14 +222,21 @@ fn check_warns_of_a_capacity_that_stalls_the_inlets_and_refuses_a_calibration_th
     }
 }
 
-/// A scene file is read up to a limit: an endless one is refused, not read until memory runs
-/// out.
+/// A scene file is read up to a limit, and only a regular file is read: an endless one is
+/// refused, not read until memory runs out.
 #[test]
-fn an_endless_scene_file_is_refused_at_its_size_limit() {
+fn an_endless_or_oversized_scene_file_is_refused() {
     let r = coil(&["check", "/dev/zero"]);
     let stderr = String::from_utf8_lossy(&r.stderr);
     assert_eq!(r.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("/dev/zero") && stderr.contains("longer than"), "{stderr}");
+    assert!(stderr.contains("/dev/zero") && stderr.contains("not a regular file"), "{stderr}");
+    let big = temp("big.toml");
+    std::fs::write(&big, vec![b'#'; 2 << 20]).expect("written");
+    let r = coil(&["check", big.to_str().expect("utf-8")]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("big.toml") && stderr.contains("longer than 1048576 bytes"), "{stderr}");
+    std::fs::remove_file(&big).ok();
 }
 
 /// Two runs never share an output folder: the second is refused while the first holds it.
@@ -345,6 +352,8 @@ enum Mutation {
     Name(String),
     /// A line of the text repeated.
     Duplicate(usize),
+    /// The first variant renamed: a path, or the name of another variant.
+    VariantName(String),
 }
 
 /// Every leaf of `value` as `--set` spells its key.
@@ -368,10 +377,16 @@ fn pick<'a, T>(items: &'a [T], state: &mut u64) -> &'a T {
     &items[(common::uniform(state) * items.len() as f64) as usize % items.len()]
 }
 
-fn mutation(text: &str, state: &mut u64) -> Mutation {
+/// A mutation of `text`; most of the time of a field under one of the `focus` prefixes, where
+/// some are given.
+fn mutation(text: &str, focus: &[&str], state: &mut u64) -> Mutation {
     let mut all = Vec::new();
     leaves(&toml::Value::Table(toml::from_str(text).expect("a shipped scene")), String::new(), &mut all);
     all.retain(|(k, _)| !k.starts_with("variant") && k != "notes" && k != "description");
+    let focused: Vec<_> = all.iter().filter(|(k, _)| focus.iter().any(|f| k.starts_with(f))).cloned().collect();
+    if !focused.is_empty() && common::uniform(state) < 0.7 {
+        all = focused;
+    }
     let (key, value) = pick(&all, state).clone();
     let numbers = |x: f64| {
         [
@@ -390,7 +405,9 @@ fn mutation(text: &str, state: &mut u64) -> Mutation {
             "9223372036854775807".into(),
         ]
     };
-    match (common::uniform(state) * 10.0) as u32 {
+    let names = ["../../../x", "", ".", "a/b", "/tmp/abs", "(another's)"];
+    match (common::uniform(state) * 11.0) as u32 {
+        10 if text.contains("[[variant]]") => Mutation::VariantName(pick(&names, state).to_string()),
         0 => Mutation::Type(key, pick(&["\"text\"", "true", "{ a = 1 }", "[]"], state).to_string()),
         1 => Mutation::Delete(key),
         2 => Mutation::Name(pick(&["\"/tmp/abs\"", "\"../../up\"", "\"\"", "\".hid\"", "\"a/b\""], state).to_string()),
@@ -449,6 +466,18 @@ fn mutated(text: &str, m: &Mutation) -> String {
         }),
         Mutation::Name(name) => {
             table.insert("name".into(), value(name));
+        }
+        Mutation::VariantName(name) => {
+            let variants = table.get_mut("variant").and_then(toml::Value::as_array_mut).expect("variants");
+            let name = match name.as_str() {
+                "(another's)" if variants.len() > 1 => variants[1]["name"].clone(),
+                "(another's)" => variants[0]["name"].clone(),
+                name => toml::Value::String(name.into()),
+            };
+            if variants.len() == 1 {
+                variants.push(variants[0].clone());
+            }
+            variants[0].as_table_mut().expect("a variant").insert("name".into(), name);
         }
         Mutation::Duplicate(line) => {
             let lines: Vec<&str> = text.lines().collect();
@@ -522,39 +551,88 @@ fn try_scene(text: &str, out: &Path) -> Outcome {
 fn mutated_scenes_are_refused_naming_a_field_or_run_writing_only_finite_frames() {
     let out = temp("fuzz");
     let mut state = 0x5eed_c011_u64;
-    let (mut refused, mut ran) = (0, 0);
+    let mut outcomes = Outcomes::default();
     for name in ["round_jet.toml", "dam_break.toml", "torus.toml", "moving_jet.toml", "rectangular_jet.toml"] {
         let text = shipped(name);
         for _ in 0..100 {
-            let m = mutation(&text, &mut state);
-            let scene = mutated(&text, &m);
-            let started = Instant::now();
-            let outcome =
-                std::panic::catch_unwind(|| try_scene(&scene, &out)).unwrap_or_else(|_| panic!("{name}: panicked on\n{scene}"));
-            assert!(started.elapsed() < Duration::from_secs(20), "{name}: took {:?} on\n{scene}", started.elapsed());
-            match outcome {
-                Outcome::Refused(e) => {
-                    assert!(!e.field.is_empty() && !e.reason.is_empty(), "{name}: {e}");
-                    refused += 1;
-                }
-                Outcome::Ran(frames) => {
-                    assert!(!frames.is_empty(), "{name}: no frame written for\n{scene}");
-                    for frame in frames {
-                        let data = coil::output::vtu_read::read_frame(&frame).expect("a whole frame");
-                        let finite = data.position.iter().flatten().all(|x| x.is_finite())
-                            && data.scalars.values().flatten().all(|x| x.is_finite())
-                            && data.vectors.values().flatten().flatten().all(|x| x.is_finite());
-                        assert!(finite, "{name}: {} holds a non-finite value; scene\n{scene}", frame.display());
-                    }
-                    ran += 1;
-                }
-                Outcome::TooLarge => {}
+            let m = mutation(&text, &[], &mut state);
+            outcomes.try_mutated(name, &mutated(&text, &m), &out);
+        }
+    }
+    std::fs::remove_dir_all(&out).ok();
+    eprintln!("{} mutated scenes refused, {} run", outcomes.refused, outcomes.ran);
+    assert!(outcomes.refused > 100 && outcomes.ran > 50, "{outcomes:?}: the mutations should reach both outcomes");
+}
+
+/// The solvers' sections written out in full at their defaults, as overrides.
+const SOLVER_SECTIONS: [&str; 2] = [
+    "simulation.divergence_free={ density_tolerance = 5e-4, divergence_tolerance = 1e-3, max_iterations = 100, min_iterations = 2, relaxation = 0.5, chebyshev_radius = 0.0, on_no_convergence = \"warn\", cfl_factor = 0.2, max_time_step_s = 1e-3, wall_pressure = \"once\" }",
+    "material.viscosity.implicit={ tolerance = 1e-3, max_iterations = 100, on_no_convergence = \"stop\", picard_iterations = 0 }",
+];
+
+/// Every variant of every shipped scene, its solvers' sections written out in full, mutated
+/// mostly in those sections, the pressure and viscosity solvers and the variants' names: each
+/// is refused naming a field, or checked and run for a few steps writing only finite frames.
+#[test]
+fn mutated_variants_and_solver_sections_are_refused_naming_a_field_or_run_writing_only_finite_frames() {
+    let out = temp("fuzz-solvers");
+    let mut state = 0x5eed_d15c_u64;
+    let mut outcomes = Outcomes::default();
+    let focus = ["simulation.divergence_free", "material.viscosity.implicit", "simulation.pressure", "material.viscosity.solver"];
+    let mut variants = 0;
+    for name in
+        ["round_jet.toml", "newtonian_jet.toml", "dam_break.toml", "torus.toml", "moving_jet.toml", "rectangular_jet.toml"]
+    {
+        let text = shipped(name);
+        for variant in Scene::parse(&text, name).expect("a shipped scene").variants {
+            variants += 1;
+            let sets: Vec<&str> = SOLVER_SECTIONS.iter().copied().chain(variant.set.iter().map(String::as_str)).collect();
+            let base = set(&text, &sets);
+            for _ in 0..25 {
+                let m = mutation(&base, &focus, &mut state);
+                outcomes.try_mutated(&format!("{name} --variant {}", variant.name), &mutated(&base, &m), &out);
             }
         }
     }
     std::fs::remove_dir_all(&out).ok();
-    eprintln!("{refused} mutated scenes refused, {ran} run");
-    assert!(refused > 100 && ran > 50, "refused {refused}, ran {ran}: the mutations should reach both outcomes");
+    eprintln!("{} mutated variants ({variants} variants) refused, {} run", outcomes.refused, outcomes.ran);
+    assert!(outcomes.refused > 100 && outcomes.ran > 50, "{outcomes:?}: the mutations should reach both outcomes");
+}
+
+/// Counts of what became of mutated scenes.
+#[derive(Debug, Default)]
+struct Outcomes {
+    refused: usize,
+    ran: usize,
+}
+
+impl Outcomes {
+    /// Tries the mutated scene `scene` of the shipped `name` into `out`: refused naming a field,
+    /// or run writing only finite frames, without a panic and within 20 s.
+    fn try_mutated(&mut self, name: &str, scene: &str, out: &Path) {
+        let started = Instant::now();
+        let outcome =
+            std::panic::catch_unwind(|| try_scene(scene, out)).unwrap_or_else(|_| panic!("{name}: panicked on\n{scene}"));
+        assert!(started.elapsed() < Duration::from_secs(20), "{name}: took {:?} on\n{scene}", started.elapsed());
+        match outcome {
+            Outcome::Refused(e) => {
+                assert!(!e.field.is_empty() && !e.reason.is_empty(), "{name}: {e}");
+                self.refused += 1;
+            }
+            Outcome::Ran(frames) => {
+                assert!(!frames.is_empty(), "{name}: no frame written for\n{scene}");
+                for frame in frames {
+                    let data = coil::output::vtu_read::read_frame(&frame).expect("a whole frame");
+                    let finite = data.position.iter().flatten().all(|x| x.is_finite())
+                        && data.scalars.values().flatten().all(|x| x.is_finite())
+                        && data.vectors.values().flatten().flatten().all(|x| x.is_finite());
+                    assert!(finite, "{name}: {} holds a non-finite value; scene\n{scene}", frame.display());
+                }
+                self.ran += 1;
+            }
+            Outcome::TooLarge => {}
+        }
+    }
 }
 
 /// A write that fails (here a frame's temporary name taken by a folder, as a full disk would
@@ -589,5 +667,323 @@ fn a_failed_write_is_named_and_logged_and_leaves_no_temporary() {
         .filter(|p| p.is_file() && p.extension().is_some_and(|x| x == "tmp"))
         .collect();
     assert!(temporaries.is_empty(), "{temporaries:?}");
+    std::fs::remove_dir_all(&out).ok();
+}
+
+/// The newtonian jet with its `divergence_free` variant applied: pressure and viscosity solved.
+fn divergence_free_jet() -> String {
+    let text = shipped("newtonian_jet.toml");
+    let scene = Scene::parse(&text, "s.toml").expect("the newtonian jet");
+    let variant = scene.variants.iter().find(|v| v.name == "divergence_free").expect("its divergence_free variant");
+    set(&text, &variant.set.iter().map(String::as_str).collect::<Vec<_>>())
+}
+
+/// A run whose steps cannot reach its end time is refused at load, naming the field that makes
+/// them so many: under solved pressure the step is counted at the fastest the fluid can move,
+/// and every field of the solvers' sections has a range, checked whichever solver the scene
+/// picks (a `--set` of the solver must not bring an unchecked value to life).
+#[test]
+fn solver_settings_that_cannot_progress_are_refused_naming_the_field() {
+    let jet = divergence_free_jet();
+    each_refused(
+        &jet,
+        &[
+            ("simulation.divergence_free.cfl_factor=1e-12", "simulation.divergence_free.cfl_factor", "from 0.001 to 1"),
+            ("simulation.divergence_free.cfl_factor=5e-324", "simulation.divergence_free.cfl_factor", "from 0.001 to 1"),
+            ("simulation.divergence_free.max_time_step_s=5e-324", "simulation.divergence_free.max_time_step_s", "steps"),
+            ("simulation.divergence_free.max_time_step_s=10", "simulation.divergence_free.max_time_step_s", "from 0 to 1"),
+            ("simulation.divergence_free.relaxation=5e-324", "simulation.divergence_free.relaxation", "from 0.01 to 0.75"),
+            ("simulation.divergence_free.density_tolerance=1e-30", "simulation.divergence_free.density_tolerance", "fraction"),
+            ("simulation.divergence_free.min_iterations=101", "simulation.divergence_free.min_iterations", "at most"),
+            ("material.viscosity.implicit.tolerance=1e-30", "material.viscosity.implicit.tolerance", "below 1"),
+            ("material.viscosity.implicit.max_iterations=0", "material.viscosity.implicit.max_iterations", "from 1"),
+            ("material.viscosity.implicit.picard_iterations=1000", "material.viscosity.implicit.picard_iterations", "from 0"),
+        ],
+    );
+    // At the slowest CFL factor the jet's fall (about 2.6 m/s) takes 6e9 steps to 1e4 s.
+    let e = refused(&jet, &["simulation.divergence_free.cfl_factor=1e-3", "simulation.end_time_s=1e4", "output.every_s=100"]);
+    assert!(e.field == "simulation.divergence_free.cfl_factor" && e.reason.contains("steps"), "{e}");
+    // The weakly compressible, explicit round jet: its solver sections are unread, and checked.
+    let round = shipped("round_jet.toml");
+    each_refused(
+        &round,
+        &[
+            ("material.viscosity.implicit={ tolerance = -1 }", "material.viscosity.implicit.tolerance", "below 1"),
+            ("simulation.divergence_free={ relaxation = 2.0 }", "simulation.divergence_free.relaxation", "0.75"),
+        ],
+    );
+    let r = coil(&[
+        "check",
+        "scenes/newtonian_jet.toml",
+        "--variant",
+        "divergence_free",
+        "--set",
+        "simulation.divergence_free.cfl_factor=1e-12",
+    ]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.code() == Some(2) && stderr.contains("simulation.divergence_free.cfl_factor"), "{stderr}");
+}
+
+/// Two inlets that lay their particles on top of each other are refused, naming the later one;
+/// two side by side are not.
+#[test]
+fn two_inlets_at_the_same_place_are_refused() {
+    let mut scene = Scene::parse(&shipped("round_jet.toml"), "s.toml").expect("the round jet");
+    scene.inlets.push(scene.inlets[0].clone());
+    let text = toml::to_string(&scene).expect("serialises");
+    let e = Scene::parse(&text, "s.toml").map(|_| ()).expect_err("two identical inlets");
+    assert!(e.field == "inlet[1]" && e.reason.contains("overlaps that of inlet[0]"), "{e}");
+    // One that starts when the other stops takes turns with it.
+    scene.inlets[0].stop_s = Some(0.2);
+    scene.inlets[1].start_s = 0.2;
+    Scene::parse(&toml::to_string(&scene).expect("serialises"), "s.toml").expect("inlets that take turns");
+    // Side by side, a diameter and a spacing apart.
+    let Nozzle::Circle { radius_m } = scene.inlets[0].nozzle else { panic!("a round nozzle") };
+    scene.inlets[1].start_s = 0.0;
+    scene.inlets[0].stop_s = None;
+    scene.inlets[1].position_m[0] += 2.0 * radius_m + scene.material.particle_spacing_m;
+    scene.domain.min_m[0] -= 0.1;
+    scene.domain.max_m[0] += 0.1;
+    Scene::parse(&toml::to_string(&scene).expect("serialises"), "s.toml").expect("inlets side by side");
+}
+
+/// `--threads` beyond a few a core is refused at once by every command that takes it, before
+/// a thread is spawned.
+#[test]
+fn thread_counts_beyond_the_machine_are_refused_by_every_command() {
+    let out = temp("threads");
+    std::fs::create_dir_all(&out).expect("folder");
+    let dir = out.to_str().expect("utf-8");
+    let commands: [&[&str]; 7] = [
+        &["run", "scenes/dam_break.toml", "--out", dir],
+        &["check", "scenes/dam_break.toml"],
+        &["resume", dir],
+        &["render", dir],
+        &["surface", dir],
+        &["pov", dir],
+        &["bench", "--out", dir],
+    ];
+    for command in commands {
+        for threads in ["100000", "0"] {
+            let started = Instant::now();
+            let r = coil(&[command, &["--threads", threads]].concat());
+            let stderr = String::from_utf8_lossy(&r.stderr);
+            assert_eq!(r.status.code(), Some(2), "{command:?} --threads {threads}: {stderr}");
+            assert!(stderr.contains("--threads: must be from 1 to"), "{command:?}: {stderr}");
+            assert!(started.elapsed() < Duration::from_secs(10), "{command:?}: refused only after {:?}", started.elapsed());
+        }
+    }
+    std::fs::remove_dir_all(&out).ok();
+}
+
+/// A variant's name joins the output folder's, so it is a plain file name, and names one
+/// variant only; `--set` cannot edit the variants it would never see.
+#[test]
+fn a_variant_name_that_is_a_path_is_refused_and_nothing_is_written_outside_the_output_folder() {
+    let jet = shipped("round_jet.toml");
+    let parsed = Scene::parse(&jet, "s.toml").expect("the round jet");
+    let with_variants = |edit: &dyn Fn(&mut Vec<coil::scene::Variant>)| {
+        let mut scene = parsed.clone();
+        edit(&mut scene.variants);
+        Scene::parse(&toml::to_string(&scene).expect("serialises"), "s.toml").map(|_| ()).expect_err("refused")
+    };
+    for name in ["../../../x", "", ".", "a/b", "/tmp/coil-variant"] {
+        let e = with_variants(&|v| v[0].name = name.into());
+        assert!(e.field == "variant[0].name" && e.reason.contains("plain file name"), "{name:?}: {e}");
+    }
+    let e = with_variants(&|v| v[0].name = v[1].name.clone());
+    assert!(e.field == "variant[1].name" && e.reason.contains("is the name of variant[0] too"), "{e}");
+    let e = with_variants(&|v| v[0].set = vec!["no equals sign".into()]);
+    assert!(e.field == "variant[0].set" && e.reason.contains("key=value"), "{e}");
+
+    let dir = temp("variant");
+    let deep = dir.join("a/b/c");
+    std::fs::create_dir_all(&deep).expect("folders");
+    let scene = dir.join("escape.toml");
+    std::fs::write(&scene, jet.replace("name = \"paper\"", "name = \"../../../x\"")).expect("write");
+    let r = std::process::Command::new(env!("CARGO_BIN_EXE_coil"))
+        .args(["run", scene.to_str().expect("utf-8"), "--quiet", "--variant", "../../../x"])
+        .current_dir(&deep)
+        .output()
+        .expect("coil runs");
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.code() == Some(2) && stderr.contains("variant[1].name"), "{stderr}");
+    let entries: Vec<_> = std::fs::read_dir(&dir).expect("dir").map(|e| e.expect("entry").file_name()).collect();
+    assert_eq!(entries.len(), 2, "the refused run wrote {entries:?}");
+    assert!(std::fs::read_dir(&deep).expect("dir").next().is_none(), "the refused run wrote into its working folder");
+
+    let r = coil(&["run", "scenes/round_jet.toml", "--variant", "paper", "--set", "variant[1].set=[]"]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.code() == Some(2) && stderr.contains("--variant NAME applies before any --set"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A short round jet into `out`: three frames, the last of 105 particles.
+fn short_jet_run(out: &Path) {
+    std::fs::remove_dir_all(out).ok();
+    let r = coil(&[
+        "run",
+        "scenes/round_jet.toml",
+        "--quiet",
+        "--out",
+        out.to_str().expect("utf-8"),
+        "--set",
+        "simulation.end_time_s=0.02",
+        "--set",
+        "output.every_s=0.01",
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+}
+
+/// Each command that reads a run's frames, with its arguments for the run in `dir`.
+fn frame_readers(dir: &Path) -> Vec<Vec<String>> {
+    let d = dir.to_str().expect("utf-8").to_string();
+    let frame = dir.join("frame_000002.vtu").to_str().expect("utf-8").to_string();
+    [
+        vec!["render", d.as_str(), "--quiet"],
+        vec!["surface", d.as_str(), "--quiet"],
+        vec!["pov", d.as_str()],
+        vec!["axis", d.as_str()],
+        vec!["preview", frame.as_str()],
+    ]
+    .iter()
+    .map(|args| args.iter().map(|a| a.to_string()).collect())
+    .collect()
+}
+
+/// Every reader of frames refuses `dir`'s damaged last frame with exit 2 within a few seconds,
+/// naming the file and `words`, never panicking.
+fn every_reader_refuses(dir: &Path, words: &str) {
+    for args in frame_readers(dir) {
+        let started = Instant::now();
+        let r = coil(&args);
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains("frame_000002.vtu") && stderr.contains(words), "{args:?}: expected {words:?} in {stderr}");
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+        assert!(started.elapsed() < Duration::from_secs(10), "{args:?}: refused only after {:?}", started.elapsed());
+    }
+}
+
+/// `bytes` of a raw `.vtu` frame with the first coordinate of particle `k` set to `x`.
+fn with_position(bytes: &[u8], k: usize, x: f64) -> Vec<u8> {
+    let text = String::from_utf8_lossy(bytes);
+    let tag = text.find("Name=\"position\"").expect("a position array");
+    let offset_at = tag + text[tag..].find("offset=\"").expect("its offset") + 8;
+    let offset: usize = text[offset_at..offset_at + text[offset_at..].find('"').expect("a quote")].parse().expect("a number");
+    let data = text.find("<AppendedData encoding=\"raw\">").expect("raw data");
+    let start = data + text[data..].find('_').expect("its start") + 1 + offset + 8 + 24 * k;
+    let mut out = bytes.to_vec();
+    out[start..start + 8].copy_from_slice(&x.to_le_bytes());
+    out
+}
+
+/// A frame is input like any other: one with a position that is not finite or lies a long way
+/// outside the run's domain, or that claims more particles than its bytes hold, is refused by
+/// every command that reads frames, naming the file and the particle.
+#[test]
+fn a_bad_frame_is_refused_by_every_reader_naming_the_file_and_the_particle() {
+    let dir = temp("bad-frame");
+    short_jet_run(&dir);
+    let frame = dir.join("frame_000002.vtu");
+    let whole = std::fs::read(&frame).expect("a frame");
+    std::fs::write(&frame, with_position(&whole, 7, f64::NAN)).expect("written");
+    every_reader_refuses(&dir, "the position of particle 7 (id");
+    std::fs::write(&frame, with_position(&whole, 7, 1e6)).expect("written");
+    every_reader_refuses(&dir, "particle 7 (id");
+    let text = String::from_utf8_lossy(&whole).replace("NumberOfPoints=\"105\"", "NumberOfPoints=\"100000000000000\"");
+    std::fs::write(&frame, text.as_bytes()).expect("written");
+    every_reader_refuses(&dir, "claims 100000000000000 points");
+    std::fs::write(&frame, &whole).expect("put back");
+    for args in frame_readers(&dir) {
+        let r = coil(&args);
+        assert!(r.status.success(), "{args:?} on the whole frame: {}", String::from_utf8_lossy(&r.stderr));
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Only regular files are read: a frame that is a link to `/dev/zero` (endless) or a FIFO
+/// (which blocks whoever opens it to read) is refused at once by every reader, as are a run's
+/// log and checkpoint and a scene file.
+#[cfg(unix)]
+#[test]
+fn files_that_are_not_regular_are_refused_without_reading_them() {
+    let dir = temp("not-regular");
+    short_jet_run(&dir);
+    let frame = dir.join("frame_000002.vtu");
+    let fifo = |path: &Path| {
+        std::fs::remove_file(path).ok();
+        let made = std::process::Command::new("mkfifo").arg(path).status().expect("mkfifo runs");
+        assert!(made.success(), "mkfifo {}", path.display());
+    };
+    let zero = |path: &Path| {
+        std::fs::remove_file(path).ok();
+        std::os::unix::fs::symlink("/dev/zero", path).expect("a link");
+    };
+    for make in [&zero as &dyn Fn(&Path), &fifo] {
+        make(&frame);
+        every_reader_refuses(&dir, "not a regular file");
+    }
+    let checkpoint = dir.join("checkpoint.bin");
+    for make in [&zero as &dyn Fn(&Path), &fifo] {
+        make(&checkpoint);
+        let r = coil(&["resume", dir.to_str().expect("utf-8"), "--quiet", "--set", "simulation.end_time_s=0.03"]);
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert!(
+            r.status.code() == Some(2) && stderr.contains("checkpoint.bin") && stderr.contains("not a regular file"),
+            "{stderr}"
+        );
+    }
+    let log = dir.join("run.json");
+    fifo(&log);
+    let r = coil(&["axis", dir.to_str().expect("utf-8")]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.code() == Some(2) && stderr.contains("run.json") && stderr.contains("not a regular file"), "{stderr}");
+    let scene = dir.join("scene.toml");
+    fifo(&scene);
+    let r = coil(&["check", scene.to_str().expect("utf-8")]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.code() == Some(2) && stderr.contains("scene.toml") && stderr.contains("not a regular file"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The numerical controls of the solvers may be retuned on resume (to get an unconverged solve
+/// past a hard stretch), and `run.json` logs the change; what a wall pushes with is physics,
+/// and is refused.
+#[test]
+fn resume_retunes_the_solvers_and_logs_it_but_keeps_their_physics() {
+    let out = temp("retune");
+    let r = common::run_divergence_free_jet(&out, &["simulation.end_time_s=0.02", "output.every_s=0.01"]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let dir = out.to_str().expect("utf-8");
+    let r = coil(&[
+        "resume",
+        dir,
+        "--quiet",
+        "--set",
+        "simulation.divergence_free.wall_pressure=mirrored",
+        "--set",
+        "simulation.end_time_s=0.03",
+    ]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.code() == Some(2) && stderr.contains("simulation.divergence_free.wall_pressure: cannot change"), "{stderr}");
+    let r = coil(&[
+        "resume",
+        dir,
+        "--quiet",
+        "--set",
+        "simulation.divergence_free.density_tolerance=1e-4",
+        "--set",
+        "material.viscosity.implicit.tolerance=1e-2",
+        "--set",
+        "simulation.end_time_s=0.03",
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let log: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("the log")).expect("JSON");
+    assert_eq!(log["scene"]["simulation"]["divergence_free"]["density_tolerance"], 1e-4, "{log}");
+    assert_eq!(log["scene"]["material"]["viscosity"]["implicit"]["tolerance"], 1e-2, "{log}");
+    let overrides: Vec<&str> = log["overrides"].as_array().expect("overrides").iter().filter_map(|o| o.as_str()).collect();
+    assert!(overrides.contains(&"simulation.divergence_free.density_tolerance=1e-4"), "{overrides:?}");
+    assert_eq!(log["summary"]["density_solve"]["tolerance"], 1e-4, "{log}");
     std::fs::remove_dir_all(&out).ok();
 }

@@ -383,16 +383,28 @@ fn resume_refuses_what_it_cannot_continue() {
 /// clock carry on from the checkpoint. The capacity fills during the run, so the stop must also
 /// carry the time it filled. With density from the continuity equation the checkpoint carries
 /// each particle's density too; particle shifting, run with it, keeps no state between steps.
-/// With implicit viscosity it carries the warm start of the next solve.
+/// With implicit viscosity it carries the warm start of the next solve, and with solved pressure
+/// the stiffness sums.
 #[test]
 fn a_jet_stopped_by_its_program_resumes_where_it_was() {
     use coil::scene::DensityEquation::{Continuity, Summation};
-    for (density, shifting, implicit) in [(Summation, 0.0, false), (Continuity, 2.0, false), (Continuity, 0.0, true)] {
-        jet_stopped_by_its_program_resumes_where_it_was(density, shifting, implicit);
+    let cases = [
+        (Summation, 0.0, false, false),
+        (Continuity, 2.0, false, false),
+        (Continuity, 0.0, true, false),
+        (Continuity, 0.0, true, true),
+    ];
+    for (density, shifting, implicit, pressure) in cases {
+        jet_stopped_by_its_program_resumes_where_it_was(density, shifting, implicit, pressure);
     }
 }
 
-fn jet_stopped_by_its_program_resumes_where_it_was(density: coil::scene::DensityEquation, shifting: f64, implicit: bool) {
+fn jet_stopped_by_its_program_resumes_where_it_was(
+    density: coil::scene::DensityEquation,
+    shifting: f64,
+    implicit: bool,
+    pressure: bool,
+) {
     use std::sync::atomic::{AtomicBool, Ordering};
     let mut scene = common::scene(&common::jet_scene(
         r#"nozzle = { shape = "circle", radius_m = 0.004 }"#,
@@ -406,7 +418,12 @@ fn jet_stopped_by_its_program_resumes_where_it_was(density: coil::scene::Density
         scene.material.viscosity.solver = coil::scene::ViscositySolver::Implicit;
         scene.material.viscosity.velocity_gradient = coil::scene::VelocityGradient::OwnDensity;
     }
-    let dir = std::env::temp_dir().join(format!("coil-resume-jet-{density:?}-{implicit}-{}", std::process::id()));
+    if pressure {
+        scene.simulation.pressure = coil::scene::Pressure::DivergenceFree;
+        scene.material.density_kernel = coil::scene::DensityKernelKind::Spiky;
+        scene.material.density_diffusion = 0.0;
+    }
+    let dir = std::env::temp_dir().join(format!("coil-resume-jet-{density:?}-{implicit}-{pressure}-{}", std::process::id()));
     let (whole, stopped) = (dir.join("whole"), dir.join("stopped"));
     let done = coil::run::run_on(None, &scene, "jet.toml", &common::quiet_run_options(&whole)).expect("the whole run");
     let filled = done.capacity_reached.expect("the capacity fills").0;
@@ -432,8 +449,58 @@ fn jet_stopped_by_its_program_resumes_where_it_was(density: coil::scene::Density
     let resumed = coil::run::resume_on(None, &stopped, &resume).expect("the resumed run");
     assert_eq!((resumed.steps, resumed.frames, resumed.fluid_particles), (done.steps, done.frames, done.fluid_particles));
     assert_eq!(resumed.capacity_reached, done.capacity_reached);
+    let solves = |s: &coil::run::Summary| [s.implicit_viscosity, s.divergence_solve, s.density_solve];
+    assert_eq!(solves(&resumed), solves(&done), "the solves of the whole run");
     let (a, b) = (run_files(&whole), run_files(&stopped));
     assert!(a.len() == done.frames + 2 && a == b, "frames, boundary and series byte for byte");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The divergence-free jet (its `divergence_free` variant, 5 particles across) stopped by its
+/// program once its rope has reached the plate, then resumed: the summary's iterations of the
+/// viscosity, divergence and density solves are those of the whole run, as from one never
+/// stopped. They vary from step to step, so a summary counting only the resumed steps differs.
+#[test]
+fn a_resumed_run_reports_the_solves_of_the_whole_run() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/newtonian_jet.toml");
+    let shipped = coil::scene::Scene::load(&path).expect("the newtonian jet");
+    let variant = shipped.variants.iter().find(|v| v.name == "divergence_free").expect("its divergence_free variant");
+    let overrides: Vec<_> = variant
+        .set
+        .iter()
+        .map(String::as_str)
+        .chain(["simulation.end_time_s=0.3", "output.every_s=0.05"])
+        .map(|o| coil::scene::overrides::Override::parse(o).expect("an override"))
+        .collect();
+    let scene = coil::scene::Scene::load_with(&path, &overrides).expect("the variant");
+    let dir = std::env::temp_dir().join(format!("coil-resume-solves-{}", std::process::id()));
+    let (whole, stopped) = (dir.join("whole"), dir.join("stopped"));
+    let done = coil::run::run_on(None, &scene, "jet.toml", &common::quiet_run_options(&whole)).expect("the whole run");
+
+    let stop: &'static AtomicBool = Box::leak(Box::new(AtomicBool::new(false)));
+    let watched = stopped.join("frame_000004.vtu");
+    let watcher = std::thread::spawn(move || {
+        let started = std::time::Instant::now();
+        while !watched.is_file() && started.elapsed() < std::time::Duration::from_secs(120) {
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+        stop.store(true, Ordering::Relaxed);
+    });
+    let options = coil::run::RunOptions { stop: Some(stop), ..common::quiet_run_options(&stopped) };
+    let at_stop = match coil::run::run_on(None, &scene, "jet.toml", &options) {
+        Err(coil::run::RunError::Interrupted(s)) => *s,
+        other => panic!("expected the stop, got {other:?}"),
+    };
+    watcher.join().expect("watcher");
+    let resume =
+        coil::run::ResumeOptions { backend: coil::run::Backend::Cpu, quiet: true, preview: false, set: vec![], stop: None };
+    let resumed = coil::run::resume_on(None, &stopped, &resume).expect("the resumed run");
+    let solves = |s: &coil::run::Summary| [s.implicit_viscosity, s.divergence_solve, s.density_solve];
+    let mean = |s: &coil::run::Summary| solves(s).map(|s| s.expect("solved").mean_iterations);
+    assert_ne!(mean(&at_stop), mean(&done), "the iterations vary, so the test can tell the whole run from its end");
+    assert_eq!(solves(&resumed), solves(&done), "the solves of the whole run");
+    assert_eq!(resumed.steps, done.steps);
     std::fs::remove_dir_all(&dir).ok();
 }
 
