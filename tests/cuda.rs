@@ -1206,9 +1206,8 @@ fn the_device_memory_a_run_reports_is_all_it_allocates() {
         assert_eq!(held, counted, "{case}: bytes the device holds, and the run counts");
     }
     // `coil check` tells it before a run.
-    let report =
-        coil::scene::check::check(&dam_break(), "dam_break.toml", Some(coil::scene::Precision::F32), std::time::Duration::ZERO)
-            .expect("a valid scene");
+    let report = coil::check::check(&dam_break(), "dam_break.toml", Some(coil::scene::Precision::F32), std::time::Duration::ZERO)
+        .expect("a valid scene");
     assert_eq!(report.device_memory_bytes, Some(dam_break_f32), "coil check's device memory");
 }
 

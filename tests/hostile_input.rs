@@ -209,7 +209,7 @@ fn scenes_that_cannot_do_what_they_ask_are_refused() {
 fn check_warns_of_a_capacity_that_stalls_the_inlets_and_refuses_a_calibration_that_is_not_a_time() {
     let jet = Scene::parse(&set(&shipped("round_jet.toml"), &["simulation.max_fluid_particles=1000"]), "s.toml")
         .expect("a smaller capacity");
-    let report = coil::scene::check::check(&jet, "s.toml", None, Duration::ZERO).expect("checked");
+    let report = coil::check::check(&jet, "s.toml", None, Duration::ZERO).expect("checked");
     let (t, needed) = report.capacity_full.expect("1000 particles fill before 0.8 s");
     assert!(t > 0.0 && t < 0.8 && needed > 1000, "{report}");
     assert!(report.to_string().contains("warning            the capacity fills"), "{report}");
@@ -517,7 +517,7 @@ fn try_scene(text: &str, out: &Path) -> Outcome {
         Ok(_) if scene.simulation.max_fluid_particles.is_some_and(|m| m as f64 > small.most) => return Outcome::TooLarge,
         Ok(_) => {}
     }
-    if let Err(e) = coil::scene::check::check(&scene, "fuzz.toml", None, Duration::ZERO) {
+    if let Err(e) = coil::check::check(&scene, "fuzz.toml", None, Duration::ZERO) {
         return Outcome::Refused(e);
     }
     let mut scene = scene;

@@ -1,8 +1,9 @@
 //! Frames read back as written; previews are pictures of the particles.
 
 use coil::output::preview::{render, render_frame, Coloring, View};
-use coil::output::vtu::{encode, Field, VtuEncoding};
+use coil::output::vtu::{encode, Field};
 use coil::output::vtu_read::parse;
+use coil::scene::VtuEncoding;
 
 mod common;
 
@@ -378,6 +379,29 @@ fn resume_refuses_what_it_cannot_continue() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Runs `scene` into `out` on the CPU, raising its stop flag (as Ctrl-C does) once `frame` is
+/// written there, and returns how the run ended.
+fn run_stopped_at(
+    scene: &coil::scene::Scene,
+    out: &std::path::Path,
+    frame: &str,
+) -> Result<coil::run::Summary, coil::run::RunError> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let stop: &'static AtomicBool = Box::leak(Box::new(AtomicBool::new(false)));
+    let watched = out.join(frame);
+    let watcher = std::thread::spawn(move || {
+        let started = std::time::Instant::now();
+        while !watched.is_file() && started.elapsed() < std::time::Duration::from_secs(120) {
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+        stop.store(true, Ordering::Relaxed);
+    });
+    let options = coil::run::RunOptions { stop: Some(stop), ..common::quiet_run_options(out) };
+    let ended = coil::run::run_on(None, scene, "jet.toml", &options);
+    watcher.join().expect("watcher");
+    ended
+}
+
 /// A jet stopped mid-run by its program (the stop flag `coil run` sets on Ctrl-C) resumes to
 /// the frames of a run never stopped: the inlets' layers and wobble, the ids and the capacity's
 /// clock carry on from the checkpoint. The capacity fills during the run, so the stop must also
@@ -405,7 +429,6 @@ fn jet_stopped_by_its_program_resumes_where_it_was(
     implicit: bool,
     pressure: bool,
 ) {
-    use std::sync::atomic::{AtomicBool, Ordering};
     let mut scene = common::scene(&common::jet_scene(
         r#"nozzle = { shape = "circle", radius_m = 0.004 }"#,
         "wobble_m = 0.0005\n[output]\nevery_s = 0.005",
@@ -429,21 +452,10 @@ fn jet_stopped_by_its_program_resumes_where_it_was(
     let filled = done.capacity_reached.expect("the capacity fills").0;
     assert!(filled > 0.01, "the capacity fills after the stop: {done:?}");
 
-    let stop: &'static AtomicBool = Box::leak(Box::new(AtomicBool::new(false)));
-    let watched = stopped.join("frame_000002.vtu");
-    let watcher = std::thread::spawn(move || {
-        let started = std::time::Instant::now();
-        while !watched.is_file() && started.elapsed() < std::time::Duration::from_secs(60) {
-            std::thread::sleep(std::time::Duration::from_millis(1));
-        }
-        stop.store(true, Ordering::Relaxed);
-    });
-    let options = coil::run::RunOptions { stop: Some(stop), ..common::quiet_run_options(&stopped) };
-    match coil::run::run_on(None, &scene, "jet.toml", &options) {
+    match run_stopped_at(&scene, &stopped, "frame_000002.vtu") {
         Err(coil::run::RunError::Interrupted(s)) => assert!(s.simulated_s < filled && s.steps < done.steps, "{s:?}"),
         other => panic!("expected the stop, got {other:?}"),
     }
-    watcher.join().expect("watcher");
     let resume =
         coil::run::ResumeOptions { backend: coil::run::Backend::Cpu, quiet: true, preview: false, set: vec![], stop: None };
     let resumed = coil::run::resume_on(None, &stopped, &resume).expect("the resumed run");
@@ -462,7 +474,6 @@ fn jet_stopped_by_its_program_resumes_where_it_was(
 /// stopped. They vary from step to step, so a summary counting only the resumed steps differs.
 #[test]
 fn a_resumed_run_reports_the_solves_of_the_whole_run() {
-    use std::sync::atomic::{AtomicBool, Ordering};
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/newtonian_jet.toml");
     let shipped = coil::scene::Scene::load(&path).expect("the newtonian jet");
     let variant = shipped.variants.iter().find(|v| v.name == "divergence_free").expect("its divergence_free variant");
@@ -478,21 +489,10 @@ fn a_resumed_run_reports_the_solves_of_the_whole_run() {
     let (whole, stopped) = (dir.join("whole"), dir.join("stopped"));
     let done = coil::run::run_on(None, &scene, "jet.toml", &common::quiet_run_options(&whole)).expect("the whole run");
 
-    let stop: &'static AtomicBool = Box::leak(Box::new(AtomicBool::new(false)));
-    let watched = stopped.join("frame_000004.vtu");
-    let watcher = std::thread::spawn(move || {
-        let started = std::time::Instant::now();
-        while !watched.is_file() && started.elapsed() < std::time::Duration::from_secs(120) {
-            std::thread::sleep(std::time::Duration::from_millis(1));
-        }
-        stop.store(true, Ordering::Relaxed);
-    });
-    let options = coil::run::RunOptions { stop: Some(stop), ..common::quiet_run_options(&stopped) };
-    let at_stop = match coil::run::run_on(None, &scene, "jet.toml", &options) {
+    let at_stop = match run_stopped_at(&scene, &stopped, "frame_000004.vtu") {
         Err(coil::run::RunError::Interrupted(s)) => *s,
         other => panic!("expected the stop, got {other:?}"),
     };
-    watcher.join().expect("watcher");
     let resume =
         coil::run::ResumeOptions { backend: coil::run::Backend::Cpu, quiet: true, preview: false, set: vec![], stop: None };
     let resumed = coil::run::resume_on(None, &stopped, &resume).expect("the resumed run");

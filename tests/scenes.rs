@@ -416,7 +416,7 @@ fn set_overrides_any_field_with_the_files_validation() {
 
 #[test]
 fn check_reports_counts_the_equation_10_bound_and_a_calibrated_estimate() {
-    use coil::scene::check::check;
+    use coil::check::check;
     use coil::simulation::time_step::Limit;
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let dam = Scene::load(&dir.join("dam_break.toml")).expect("valid");
@@ -668,7 +668,7 @@ fn the_default_time_step_serialises_as_before_viscous_velocity_existed() {
 /// change on resume, or only describes the run: a field added to the scene must be put in one.
 #[test]
 fn every_scene_field_is_physics_resumable_or_description() {
-    use coil::run::checkpoint::{PHYSICS, RESUMABLE};
+    use coil::run::fields::{PHYSICS, RESUMABLE};
     const DESCRIPTION: [&str; 4] = ["name", "description", "notes", "variant"];
     fn leaves(value: &serde_json::Value, path: String, out: &mut Vec<String>) {
         match value {
@@ -706,7 +706,7 @@ fn every_scene_field_is_physics_resumable_or_description() {
 
 #[test]
 fn the_fingerprint_follows_physics_and_ignores_the_rest() {
-    use coil::run::checkpoint::fingerprint;
+    use coil::run::fields::fingerprint;
     let scene = Scene::load(std::path::Path::new("scenes/round_jet.toml")).expect("loads");
     let base = fingerprint(&scene);
     let mut renamed = scene.clone();

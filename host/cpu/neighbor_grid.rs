@@ -13,7 +13,7 @@ use coil_kernels::counting_sort::{
 use coil_kernels::fluid_cells::{holds_fluid_pass, near_fluid_pass, HoldsFluidArgs, NearFluidArgs};
 use coil_kernels::neighbor_list::{neighbor_list_pass, ListedNeighborhood, NeighborListArgs, NEIGHBOR_SLOTS};
 use coil_kernels::smoothing::SmoothingKernels;
-use coil_kernels::topology::{Open, Periodic, Topology};
+use coil_kernels::topology::{Open, Periodic, Topology, PERIODIC_ROUNDING};
 use coil_kernels::view::{Vec3View, View, ViewMut};
 use coil_kernels::Real;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -41,11 +41,6 @@ pub struct NeighborGrid {
     /// `NEIGHBOR_SLOTS` per particle of capacity once `keep_neighbor_lists` allocates them.
     neighbor_list: ParticleArray<u32>,
 }
-
-/// How far below the support radius (relative) a periodic axis's cells may fall: a period
-/// written in decimal, 0.0003 m for 3 h = 3 x 1e-4 m, is 3 h less a rounding. Pairs that the
-/// grid then misses lie beyond h (1 - 1e-9), where every kernel is below 1e-9 of its peak.
-pub const PERIODIC_ROUNDING: f64 = 1e-9;
 
 impl NeighborGrid {
     /// A grid of cells of edge `cell_size` (m, the support radius) over the domain box; along

@@ -1,7 +1,8 @@
 //! Per-particle output fields of the fluid, gathered from a run into reusable buffers.
 
 use crate::output::points::{encode_ply, encode_xyz};
-use crate::output::vtu::{encode, Field, VtuEncoding};
+use crate::output::vtu::{encode, Field};
+use crate::scene::VtuEncoding;
 use crate::simulation::model::Model;
 use crate::simulation::particles::{vec3_view, HostParticles};
 use crate::simulation::RunState;

@@ -2,6 +2,7 @@
 //! `.pvd` series.
 
 use super::write_atomically;
+use crate::scene::VtuEncoding;
 use std::fmt::Write as _;
 use std::io;
 use std::path::{Path, PathBuf};
@@ -11,19 +12,6 @@ pub enum Field<'a> {
     Scalar(&'a str, &'a [f32]),
     Vector(&'a str, &'a [[f32; 3]]),
     Id(&'a str, &'a [u32]),
-}
-
-/// How a `.vtu` frame holds its arrays.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum VtuEncoding {
-    /// Appended raw binary: the smallest and fastest to write; ParaView reads it, meshio and
-    /// vtkio (splashsurf) do not.
-    #[default]
-    Raw,
-    /// Each array inline in base64 (`format="binary"`, header and data in one stream, as VTK
-    /// writes them): a third larger, and read by ParaView, meshio and vtkio alike.
-    Base64,
 }
 
 /// One array's bytes, as its UInt64 block header announces them.

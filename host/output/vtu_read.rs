@@ -1,7 +1,8 @@
 //! Reads back the `.vtu` frames that `vtu::encode` writes (appended raw binary or inline base64,
-//! UInt64 block headers) and the `.pvd` series that lists them, for `coil preview`, `coil axis`
-//! and the round-trip test. Other VTK writers' files are refused with a reason rather than
-//! misread.
+//! UInt64 block headers) and the `.pvd` series that lists them, for the commands that read
+//! frames back (render, surface, pov, axis, preview) and the round-trip test. Other VTK
+//! writers' files are refused with a reason rather than misread, and so is a frame no run
+//! writes.
 
 use crate::scene::Scene;
 use std::collections::BTreeMap;
@@ -39,7 +40,7 @@ fn attribute(tag: &str, name: &str) -> Option<String> {
 }
 
 /// The largest frame file read (bytes): a frame of a billion particles.
-pub const MAX_FRAME_BYTES: u64 = 1 << 36;
+const MAX_FRAME_BYTES: u64 = 1 << 36;
 /// The largest `.pvd` series read (bytes): a run writes at most 1e5 frames, under 100 bytes each
 /// in its series.
 const MAX_SERIES_BYTES: u64 = 64 << 20;

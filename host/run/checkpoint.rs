@@ -15,7 +15,9 @@
 //! fingerprint, the fields in the order `write` gives them, and an FNV-1a checksum of all the
 //! bytes before it, so a damaged file is refused rather than misread.
 
+use super::fields::fingerprint;
 use super::summary::{Tally, WrittenFile};
+use crate::fnv1a::fnv1a;
 use crate::scene::Scene;
 use crate::simulation::model::Model;
 use crate::simulation::particles::Particles;
@@ -26,7 +28,7 @@ use coil_kernels::Real;
 use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"COILCKPT";
-/// 2: the fingerprint hashes the [`PHYSICS`] fields only. 3: the frame files' sizes and
+/// 2: the fingerprint hashes the `fields::PHYSICS` fields only. 3: the frame files' sizes and
 /// digests. 4: a flag after the densities, then the implicit solve's viscous change where it
 /// is set (a version 3 checkpoint, which has neither, is read as unset). 5: then a flag and
 /// the pressure solves' stiffness sums where pressure is solved. 6: then the iterations of the
@@ -35,89 +37,6 @@ const FORMAT_VERSION: u32 = 6;
 
 /// The largest checkpoint read (bytes): a billion particles in f64.
 const MAX_CHECKPOINT_BYTES: u64 = 1 << 37;
-
-/// FNV-1a, 64 bits: the same value on every machine and Rust version, unlike std's hasher.
-pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
-}
-
-/// Fields of a scene that a resumed run may change, as `--set` spells them (a section stands for
-/// every field in it): how far it runs, how it picks dt, and how far its solvers iterate (to get
-/// past an instability or an unconverged solve from the last good frame), and what it writes.
-/// The numerical controls of the solves change how closely a step meets the equations, not
-/// which equations: what a wall pushes with (`divergence_free.wall_pressure`) is physics, and
-/// stays.
-pub const RESUMABLE: [&str; 13] = [
-    "simulation.end_time_s",
-    "simulation.time_step",
-    "simulation.divergence_free.density_tolerance",
-    "simulation.divergence_free.divergence_tolerance",
-    "simulation.divergence_free.max_iterations",
-    "simulation.divergence_free.min_iterations",
-    "simulation.divergence_free.relaxation",
-    "simulation.divergence_free.chebyshev_radius",
-    "simulation.divergence_free.on_no_convergence",
-    "simulation.divergence_free.cfl_factor",
-    "simulation.divergence_free.max_time_step_s",
-    "material.viscosity.implicit",
-    "output",
-];
-
-/// The fields that fix what a step computes, as `--set` spells them: a checkpoint resumes only a
-/// scene that agrees with the one it was taken from on each (array sections as a whole). A field
-/// added to the scene joins this list only if it changes the physics, and must then be left out
-/// of the serialized scene at its default, so that checkpoints taken before it existed resume.
-pub const PHYSICS: [&str; 32] = [
-    "material.rest_density_kg_m3",
-    "material.sound_speed_m_s",
-    "material.clamp_negative_pressure",
-    "material.pressure_gradient",
-    "material.density_kernel",
-    "material.density_equation",
-    "material.density_diffusion",
-    "material.particle_spacing_m",
-    "material.support_radius_factor",
-    "material.gravity_m_s2",
-    "material.viscosity.operator",
-    "material.viscosity.nu0_m2_s",
-    "material.viscosity.nu_inf_m2_s",
-    "material.viscosity.cross_k_s",
-    "material.viscosity.cross_n",
-    "material.viscosity.hourglass_control",
-    "material.viscosity.velocity_gradient",
-    "material.viscosity.solver",
-    "domain.min_m",
-    "domain.max_m",
-    "domain.periodic",
-    "simulation.precision",
-    "simulation.max_fluid_particles",
-    "simulation.walls",
-    "simulation.particle_shifting",
-    "simulation.pressure",
-    "simulation.divergence_free.wall_pressure",
-    "fluid_block",
-    "fluid_torus",
-    "fluid_cylinder",
-    "boundary",
-    "inlet",
-];
-
-/// Identifies the physics of `scene` (resolved, as `run.json` logs it): a hash of the
-/// [`PHYSICS`] fields, each with its name, in that order.
-pub fn fingerprint(scene: &Scene) -> u64 {
-    let json = serde_json::to_value(crate::run::run_log::resolved(scene)).expect("a scene serialises");
-    let mut bytes = Vec::new();
-    for field in PHYSICS {
-        let value = field.split('.').try_fold(&json, |v, key| v.get(key));
-        if let Some(value) = value.filter(|v| !v.is_null()) {
-            bytes.extend_from_slice(field.as_bytes());
-            bytes.push(b'=');
-            serde_json::to_writer(&mut bytes, value).expect("a value serialises");
-            bytes.push(b'\n');
-        }
-    }
-    fnv1a(&bytes)
-}
 
 fn limit_code(limit: Limit) -> u8 {
     match limit {

@@ -2,6 +2,7 @@
 //! as it goes.
 
 pub mod checkpoint;
+pub mod fields;
 pub mod folder;
 mod frames;
 pub mod interrupt;
@@ -226,7 +227,7 @@ pub struct ResumeOptions {
     pub backend: Backend,
     pub quiet: bool,
     pub preview: bool,
-    /// `--set` overrides of the fields `checkpoint::RESUMABLE` names: a later end time, another
+    /// `--set` overrides of the fields `fields::RESUMABLE` names: a later end time, another
     /// time step, other output.
     pub set: Vec<String>,
     /// As `RunOptions::stop`.
@@ -254,21 +255,20 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
     let mut overrides = Vec::new();
     for given in &options.set {
         let key = given.split_once('=').map_or(given.as_str(), |(key, _)| key.trim());
-        let resumable =
-            checkpoint::RESUMABLE.iter().any(|f| key == *f || key.strip_prefix(f).is_some_and(|r| r.starts_with('.')));
+        let resumable = fields::RESUMABLE.iter().any(|f| key == *f || key.strip_prefix(f).is_some_and(|r| r.starts_with('.')));
         if !resumable {
             return Err(bad(
                 Path::new("--set"),
                 key,
                 format!(
                     "cannot change when resuming: the checkpoint holds the state of the scene it was taken from; only {} may",
-                    checkpoint::RESUMABLE.join(", ")
+                    fields::RESUMABLE.join(", ")
                 ),
             ));
         }
         overrides.push(crate::scene::overrides::Override::parse(given).map_err(RunError::Scene)?);
     }
-    let scene = Scene::from_log(&log, &log_path, &overrides).map_err(RunError::Scene)?;
+    let scene = Scene::from_log(&log.scene, &log_path, &overrides).map_err(RunError::Scene)?;
     let checkpoint_path = dir.join(folder::CHECKPOINT);
     // Anything at the path is read, and refused there if it is not a regular file.
     if !checkpoint_path.exists() {
@@ -282,7 +282,7 @@ pub fn resume_on(device: Option<Device>, dir: &Path, options: &ResumeOptions) ->
         ));
     }
     let mut checkpoint = Checkpoint::read(&checkpoint_path).map_err(|e| bad(&checkpoint_path, "(file)", e))?;
-    if checkpoint.fingerprint != checkpoint::fingerprint(&scene) {
+    if checkpoint.fingerprint != fields::fingerprint(&scene) {
         return Err(bad(
             &checkpoint_path,
             "(file)",
@@ -328,7 +328,7 @@ fn verify_frames(dir: &Path, files: &[summary::WrittenFile], log: &RunLog) -> Re
             Ok(bytes) if bytes.len() as u64 != file.bytes => {
                 format!("holds {} bytes where the run wrote {}", bytes.len(), file.bytes)
             }
-            Ok(bytes) if checkpoint::fnv1a(&bytes) != file.digest => "was changed since the run wrote it".to_string(),
+            Ok(bytes) if crate::fnv1a::fnv1a(&bytes) != file.digest => "was changed since the run wrote it".to_string(),
             Ok(_) => continue,
         };
         return Err(RunError::Scene(SceneError {

@@ -23,9 +23,6 @@ pub struct Resumed {
     pub time_s: f64,
 }
 
-/// The largest run log read (bytes): its scene, overrides and summary take a few KiB.
-const MAX_LOG_BYTES: u64 = 16 << 20;
-
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Status {
@@ -74,18 +71,6 @@ impl RunLog {
 
     /// Reads a run log; the error names the file and the field that does not fit.
     pub fn read(path: &Path) -> Result<RunLog, SceneError> {
-        let file = path.display().to_string();
-        let bad = |field: String, reason: String| SceneError { file: file.clone(), field, reason };
-        let text = crate::regular_file::read_text(path, MAX_LOG_BYTES)
-            .map_err(|e| bad("(file)".into(), format!("cannot be read: {e}")))?;
-        let json = &mut serde_json::Deserializer::from_str(&text);
-        serde_path_to_error::deserialize(json).map_err(|e| {
-            let field = e.path().to_string();
-            let inner = e.into_inner();
-            match inner.classify() {
-                serde_json::error::Category::Data if field != "." => bad(field, inner.to_string()),
-                _ => bad("(syntax)".into(), inner.to_string()),
-            }
-        })
+        crate::scene::logged::read_json(path)
     }
 }

@@ -142,7 +142,7 @@ pub struct WrittenFile {
 
 impl WrittenFile {
     pub fn of(name: String, bytes: &[u8]) -> Self {
-        Self { name, bytes: bytes.len() as u64, digest: super::checkpoint::fnv1a(bytes) }
+        Self { name, bytes: bytes.len() as u64, digest: crate::fnv1a::fnv1a(bytes) }
     }
 }
 

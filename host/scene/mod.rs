@@ -2,14 +2,13 @@
 //! (`deny_unknown_fields`), validated once at load, then turned into plain `Copy` parameter
 //! structs for the kernels.
 
-pub mod check;
+pub mod logged;
 pub mod overrides;
 pub mod particle_limit;
 pub mod setup;
 pub mod toml_field;
 mod validate;
 
-use crate::output::vtu::VtuEncoding;
 use overrides::Override;
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -692,6 +691,19 @@ fn is_default<T: Default + PartialEq>(value: &T) -> bool {
     *value == T::default()
 }
 
+/// How a `.vtu` frame holds its arrays.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VtuEncoding {
+    /// Appended raw binary: the smallest and fastest to write; ParaView reads it, meshio and
+    /// vtkio (splashsurf) do not.
+    #[default]
+    Raw,
+    /// Each array inline in base64 (`format="binary"`, header and data in one stream, as VTK
+    /// writes them): a third larger, and read by ParaView, meshio and vtkio alike.
+    Base64,
+}
+
 /// A file format of output frames.
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
@@ -827,7 +839,7 @@ pub fn short(v: f64) -> String {
 /// The TOML text of a scene file; a `run.json` gives its `scene`, written back as TOML.
 fn scene_text(path: &Path) -> Result<String, SceneError> {
     if path.extension().is_some_and(|x| x == "json") {
-        return logged_scene_text(&crate::run::run_log::RunLog::read(path)?, path);
+        return logged::logged_scene_text(path);
     }
     crate::regular_file::read_text(path, MAX_SCENE_BYTES).map_err(|e| SceneError {
         file: path.display().to_string(),
@@ -838,15 +850,6 @@ fn scene_text(path: &Path) -> Result<String, SceneError> {
 
 /// The largest scene file read (bytes): the shipped scenes are about 2 KiB.
 pub const MAX_SCENE_BYTES: u64 = 1 << 20;
-
-/// The scene a run log holds, as TOML; `path` names the log in errors.
-fn logged_scene_text(log: &crate::run::run_log::RunLog, path: &Path) -> Result<String, SceneError> {
-    toml::to_string(&log.scene).map_err(|e| SceneError {
-        file: path.display().to_string(),
-        field: "scene".into(),
-        reason: e.to_string(),
-    })
-}
 
 /// For serde's "unknown field `x`, expected one of `a`, `b`" (or "expected `a` or `b`"): the
 /// valid name that adds a unit to `x` (`cross_k` for `cross_k_s`: the unit is what users leave
@@ -894,10 +897,10 @@ impl Scene {
         Self::with_overrides(&scene_text(path)?, &path.display().to_string(), overrides)
     }
 
-    /// The scene of a run log read from `path`, with `--set` overrides applied in order and
+    /// The scene `logged` in the run log `path`, with `--set` overrides applied in order and
     /// validated as one.
-    pub fn from_log(log: &crate::run::run_log::RunLog, path: &Path, overrides: &[Override]) -> Result<Scene, SceneError> {
-        Self::with_overrides(&logged_scene_text(log, path)?, &path.display().to_string(), overrides)
+    pub fn from_log(logged: &Scene, path: &Path, overrides: &[Override]) -> Result<Scene, SceneError> {
+        Self::with_overrides(&logged::scene_as_toml(logged, path)?, &path.display().to_string(), overrides)
     }
 
     fn with_overrides(text: &str, file: &str, overrides: &[Override]) -> Result<Scene, SceneError> {

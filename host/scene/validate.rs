@@ -82,6 +82,30 @@ impl Scene {
         )
     }
 
+    /// The fastest the scene's fluid can move (m/s) with all the height it can fall turned into
+    /// speed: its fastest jet or initial velocity U, and free fall g through the domain's
+    /// extent along gravity, sqrt(U^2 + 2 g extent); along a periodic axis the free fall is
+    /// left out, so the speed is a lower bound there.
+    pub fn fastest_speed(&self) -> f64 {
+        let norm = |v: [f64; 3]| v.iter().map(|c| c * c).sum::<f64>().sqrt();
+        let start = self
+            .inlets
+            .iter()
+            .map(|i| i.speed_m_s)
+            .chain(self.fluid_blocks.iter().map(|b| norm(b.velocity_m_s)))
+            .chain(self.fluid_tori.iter().map(|t| norm(t.velocity_m_s)))
+            .chain(self.fluid_cylinders.iter().map(|c| norm(c.velocity_m_s)))
+            .fold(0.0, f64::max);
+        let (g, d) = (self.material.gravity_m_s2, &self.domain);
+        let g_norm = norm(g);
+        let drop = if g_norm > 0.0 && !(0..3).any(|a| d.periodic[a] && g[a] != 0.0) {
+            (0..3).map(|a| g[a].abs() / g_norm * (d.max_m[a] - d.min_m[a])).sum::<f64>()
+        } else {
+            0.0
+        };
+        (start * start + 2.0 * g_norm * drop).sqrt()
+    }
+
     /// `given`: the scene as its text reads, before serde filled the fields.
     pub(super) fn validate(&self, given: &toml::Table, file: &str) -> Result<(), SceneError> {
         let check = Check { file };
@@ -106,7 +130,7 @@ impl Scene {
         // Solved pressure steps by the flow's speed: its steps are counted at the fastest the
         // fluid, checked above, can move.
         if self.simulation.pressure == Pressure::DivergenceFree {
-            check.steps(&self.simulation, &self.material, self.support_radius(), fastest_speed(self))?;
+            check.steps(&self.simulation, &self.material, self.support_radius(), self.fastest_speed())?;
         }
         Ok(())
     }
@@ -332,7 +356,7 @@ impl Check<'_> {
         }
         for a in (0..3).filter(|&a| d.periodic[a]) {
             let length = d.max_m[a] - d.min_m[a];
-            if length * (1.0 + crate::cpu::neighbor_grid::PERIODIC_ROUNDING) < 3.0 * h {
+            if length * (1.0 + coil_kernels::topology::PERIODIC_ROUNDING) < 3.0 * h {
                 return self.fail(
                     "domain.periodic",
                     format!(
@@ -737,30 +761,6 @@ fn step_at(s: &SimulationSettings, m: &Material, h: f64, speed_m_s: f64) -> (f64
             TimeStepper { bound, support_radius: h, safety_factor: s.time_step.safety_factor, fixed: None, cfl }.next(speed_m_s)
         }
     }
-}
-
-/// The fastest the fluid of `scene` can move (m/s) with all the height it can fall turned into
-/// speed: its fastest jet or initial velocity U, and free fall g through the domain's extent
-/// along gravity, sqrt(U^2 + 2 g extent); along a periodic axis the free fall is left out, so
-/// the speed is a lower bound there.
-pub(super) fn fastest_speed(scene: &Scene) -> f64 {
-    let norm = |v: [f64; 3]| v.iter().map(|c| c * c).sum::<f64>().sqrt();
-    let start = scene
-        .inlets
-        .iter()
-        .map(|i| i.speed_m_s)
-        .chain(scene.fluid_blocks.iter().map(|b| norm(b.velocity_m_s)))
-        .chain(scene.fluid_tori.iter().map(|t| norm(t.velocity_m_s)))
-        .chain(scene.fluid_cylinders.iter().map(|c| norm(c.velocity_m_s)))
-        .fold(0.0, f64::max);
-    let (g, d) = (scene.material.gravity_m_s2, &scene.domain);
-    let g_norm = norm(g);
-    let drop = if g_norm > 0.0 && !(0..3).any(|a| d.periodic[a] && g[a] != 0.0) {
-        (0..3).map(|a| g[a].abs() / g_norm * (d.max_m[a] - d.min_m[a])).sum::<f64>()
-    } else {
-        0.0
-    };
-    (start * start + 2.0 * g_norm * drop).sqrt()
 }
 
 /// Eq. (10) for the scene, at the largest viscosity `nu` (m^2/s): without its acoustic term

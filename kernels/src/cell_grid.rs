@@ -242,9 +242,9 @@ impl<T: Topology> Neighborhood<'_, T> {
             }
         };
         for dz in -1..=1 {
-            let Some(z) = wrap.neighbor_cell(&self.grid, 2, c[2], dz) else { continue };
+            let Some(z) = wrap.neighbor_cell(2, self.grid.dims[2], c[2], dz) else { continue };
             for dy in -1..=1 {
-                let Some(y) = wrap.neighbor_cell(&self.grid, 1, c[1], dy) else { continue };
+                let Some(y) = wrap.neighbor_cell(1, self.grid.dims[1], c[1], dy) else { continue };
                 run(first, y, z);
                 if let Some(second) = second {
                     run(second, y, z);

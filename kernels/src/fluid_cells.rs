@@ -70,11 +70,11 @@ fn holds_fluid_around<T: Topology>(c: usize, a: &NearFluidArgs<T>) -> bool {
     let cell = a.grid.cell_of_index(c as u32);
     let wrap = Periodic { origin: a.grid.origin, period: a.topology.periods() };
     for dz in -1..=1 {
-        let Some(z) = wrap.neighbor_cell(&a.grid, 2, cell[2], dz) else { continue };
+        let Some(z) = wrap.neighbor_cell(2, a.grid.dims[2], cell[2], dz) else { continue };
         for dy in -1..=1 {
-            let Some(y) = wrap.neighbor_cell(&a.grid, 1, cell[1], dy) else { continue };
+            let Some(y) = wrap.neighbor_cell(1, a.grid.dims[1], cell[1], dy) else { continue };
             for dx in -1..=1 {
-                let Some(x) = wrap.neighbor_cell(&a.grid, 0, cell[0], dx) else { continue };
+                let Some(x) = wrap.neighbor_cell(0, a.grid.dims[0], cell[0], dx) else { continue };
                 if a.holds_fluid.at(a.grid.linear_index([x, y, z]) as usize) != 0 {
                     return true;
                 }

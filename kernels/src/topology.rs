@@ -4,7 +4,6 @@
 //! A run's topology is a type: an open run's neighbor loop and leap-frog contain no periodic
 //! code at all, and a periodic run's pay for the wrap only on the axes that wrap.
 
-use crate::cell_grid::CellGrid;
 use core::fmt::Debug;
 
 /// The shape of the domain, fixed for a run.
@@ -77,11 +76,11 @@ impl Topology for Periodic {
 }
 
 impl Periodic {
-    /// The grid's cell coordinate `c + offset` along axis `a`, `offset` within one period,
-    /// wrapped when the axis wraps; `None` where an open axis ends.
+    /// The cell coordinate `c + offset` along axis `a` of a grid `cells` cells long there,
+    /// `offset` within one period, wrapped when the axis wraps; `None` where an open axis ends.
     #[inline(always)]
-    pub fn neighbor_cell(&self, grid: &CellGrid, a: usize, c: u32, offset: i32) -> Option<u32> {
-        let d = grid.dims[a] as i32;
+    pub fn neighbor_cell(&self, a: usize, cells: u32, c: u32, offset: i32) -> Option<u32> {
+        let d = cells as i32;
         let k = c as i32 + offset;
         if self.period[a] > 0.0 {
             // A remainder would leave a division-by-zero trap in the device code.
@@ -99,6 +98,11 @@ impl Periodic {
         }
     }
 }
+
+/// How far below the support radius (relative) a periodic axis's cells may fall: a period
+/// written in decimal, 0.0003 m for 3 h = 3 x 1e-4 m, is 3 h less a rounding. Pairs that the
+/// grid then misses lie beyond h (1 - 1e-9), where every kernel is below 1e-9 of its peak.
+pub const PERIODIC_ROUNDING: f64 = 1e-9;
 
 /// The minimum-image difference along an axis of period `l` (m): the nearest copy of the
 /// neighbor. Neighbors lie within h and periods are at least 3 h, so one shift suffices.

@@ -115,14 +115,14 @@ impl fmt::Display for Report {
     }
 }
 
-/// The fastest a fluid particle can move (m/s) (`validate::fastest_speed`); `None` where
+/// The fastest a fluid particle can move (m/s) (`Scene::fastest_speed`); `None` where
 /// gravity runs along a periodic axis, which bounds the fall by viscosity only.
 fn speed_bound(scene: &Scene) -> Option<f64> {
     let (g, d) = (scene.material.gravity_m_s2, &scene.domain);
     if (0..3).any(|a| d.periodic[a] && g[a] != 0.0) {
         return None;
     }
-    Some(super::validate::fastest_speed(scene))
+    Some(scene.fastest_speed())
 }
 
 fn human(s: f64) -> String {
