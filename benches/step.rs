@@ -2,11 +2,11 @@
 //! 64K fluid particles, f32 and f64, with the paper's operator (Cross, K = 1) and with the
 //! Newtonian Laplacian operator, h = 2 x spacing.
 
+use coil::cpu::simulation::CpuSimulation;
 use coil::scene::setup::initial_particles;
 use coil::scene::Scene;
 use coil::simulation::backend::Backend as _;
 use coil::simulation::model::{cross_law, LaplacianModel, Model, StressModel};
-use coil::simulation::Simulation;
 use coil_kernels::cross_viscosity::{Cross, Newtonian};
 use coil_kernels::velocity_gradient::KernelSum;
 use coil_kernels::Real;
@@ -28,7 +28,7 @@ fn bench_variant<R: Real, M: Model<R>>(c: &mut Criterion, label: &str, model: im
     for per_edge in [25usize, 40] {
         let scene = dam_break(per_edge);
         let initial = initial_particles(&scene, "dam_break.toml").expect("valid");
-        let mut sim = Simulation::<R, M>::new(&scene, &initial, model(&scene));
+        let mut sim = CpuSimulation::<R, M>::new(&scene, &initial, model(&scene));
         // Let the column start to fall so neighbor counts are those of a moving flow.
         for _ in 0..20 {
             sim.step().expect("stable");

@@ -1,15 +1,16 @@
 //! `coil check`: what a scene will cost before it runs. Counts, h, the Eq. (10) bound and its
 //! limiting term, memory, and a wall-time estimate from a short calibration run on this machine.
 
+use crate::cpu::simulation::CpuSimulation;
 use crate::scene::setup::{initial_particles, InitialParticles};
 use crate::scene::{Boundary, Domain, FluidBlock, Precision, Pressure, Scene, SceneError};
 use crate::simulation::backend::Backend as _;
 use crate::simulation::inlet::Inlet;
-use crate::simulation::model::{with_precision_and_model, Model, WithModel};
+use crate::simulation::model::Model;
 use crate::simulation::time_step::{Limit, StabilityBound, TimeStepper};
+use crate::simulation::variant::{with_precision_and_model, WithModel};
 #[cfg(feature = "cuda")]
 use crate::simulation::Setup;
-use crate::simulation::Simulation;
 use coil_kernels::Real;
 use std::fmt;
 use std::time::{Duration, Instant};
@@ -194,7 +195,7 @@ impl WithModel for Calibrate<'_> {
     /// (seconds per particle-step, steps taken)
     type Output = (f64, u64);
     fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
-        let mut sim = Simulation::<R, M>::new(self.scene, self.initial, model);
+        let mut sim = CpuSimulation::<R, M>::new(self.scene, self.initial, model);
         let started = Instant::now();
         let mut particle_steps = 0.0;
         // Stop at the first instability too: a scene's cost is still worth reporting.
@@ -223,7 +224,7 @@ struct Plan<'a> {
 impl WithModel for Plan<'_> {
     type Output = RunPlan;
     fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
-        let sim = Simulation::<R, M>::new(self.scene, self.initial, model);
+        let sim = CpuSimulation::<R, M>::new(self.scene, self.initial, model);
         let run = &sim.run;
         let (inlets, fluid_capacity, stepper, memory_bytes) =
             (run.inlets().to_vec(), run.fluid_capacity(), run.stepper, sim.backend.memory_bytes());

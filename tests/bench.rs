@@ -5,9 +5,10 @@ mod common;
 
 use coil::bench::operation_count::{count_step_operations, counting, Counted};
 use coil::bench::{dam_break, PeakRates, TABLE_I};
+use coil::cpu::simulation::CpuSimulation;
 use coil::scene::setup::{initial_particles, InitialParticles};
-use coil::simulation::model::{with_model, Model, WithModel};
-use coil::simulation::Simulation;
+use coil::simulation::model::Model;
+use coil::simulation::variant::{with_model, WithModel};
 use coil_kernels::Real;
 use common::coil;
 
@@ -95,7 +96,7 @@ struct TwoSteps<'a>(&'a coil::scene::Scene, &'a InitialParticles);
 impl WithModel for TwoSteps<'_> {
     type Output = Vec<f64>;
     fn with<R: Real, M: Model<R>>(self, model: M) -> Vec<f64> {
-        let mut sim = Simulation::<R, M>::new(self.0, self.1, model);
+        let mut sim = CpuSimulation::<R, M>::new(self.0, self.1, model);
         for _ in 0..2 {
             let (dt, limit) = sim.next_dt();
             sim.step_with(dt, limit).expect("stable");

@@ -9,6 +9,7 @@
 
 mod common;
 
+use coil::cpu::simulation::CpuSimulation;
 use coil::cuda::device_array::{vec3_view, vec3_view_mut, DeviceArray};
 use coil::cuda::gpu::{ByValue, PTX};
 use coil::cuda::{Gpu, GpuSimulation};
@@ -358,10 +359,10 @@ fn both_with<R: Real, M: Model<R>>(
     model: M,
     steps: usize,
     dt: f64,
-) -> (Simulation<R, M>, GpuSimulation<R, M>) {
+) -> (CpuSimulation<R, M>, GpuSimulation<R, M>) {
     let initial = initial_particles(scene, "test scene").expect("valid");
-    let mut cpu = Simulation::<R, M>::new(scene, &initial, model);
-    let mut on_gpu = GpuSimulation::<R, M>::new_on_gpu(scene, &initial, model, gpu).expect("device state");
+    let mut cpu = CpuSimulation::<R, M>::new(scene, &initial, model);
+    let mut on_gpu = GpuCpuSimulation::<R, M>::new_on_gpu(scene, &initial, model, gpu).expect("device state");
     on_gpu.backend.check_every = 1;
     for _ in 0..steps {
         cpu.step_with(dt, coil::simulation::time_step::Limit::Acoustic).expect("stable on the CPU");
@@ -372,7 +373,7 @@ fn both_with<R: Real, M: Model<R>>(
 }
 
 /// `steps` steps of 2e-4 s, the dam break's acoustic bound.
-fn both<R: Real, M: Model<R>>(gpu: Gpu, scene: &Scene, model: M, steps: usize) -> (Simulation<R, M>, GpuSimulation<R, M>) {
+fn both<R: Real, M: Model<R>>(gpu: Gpu, scene: &Scene, model: M, steps: usize) -> (CpuSimulation<R, M>, GpuSimulation<R, M>) {
     both_with(gpu, scene, model, steps, 2e-4)
 }
 
@@ -547,7 +548,7 @@ fn a_jet_on_the_gpu_agrees_with_the_cpu() {
 #[test]
 fn implicit_viscosity_on_the_gpu_agrees_with_the_cpu() {
     use coil::scene::{ViscosityOperator, ViscositySolver};
-    use coil::simulation::implicit_viscosity::{ImplicitModel, MorrisOperator, ShearThinningMorrisOperator, StressOperator};
+    use coil::simulation::implicit_weiler2018::{ImplicitModel, MorrisOperator, ShearThinningMorrisOperator, StressOperator};
     fn agree<M: Model<f64>>(scene: &Scene, operator: M, what: &str) {
         for engine in engines() {
             let (cpu, on_gpu) = both_with::<f64, _>(engine.open(), scene, operator, 300, 2e-4);
@@ -588,7 +589,7 @@ fn implicit_viscosity_on_the_gpu_agrees_with_the_cpu() {
 #[test]
 fn divergence_free_pressure_on_the_gpu_agrees_with_the_cpu() {
     use coil::scene::{DensityEquation, Pressure, ViscositySolver};
-    use coil::simulation::implicit_viscosity::{ImplicitModel, StressOperator};
+    use coil::simulation::implicit_weiler2018::{ImplicitModel, StressOperator};
     fn agree<M: Model<f64>>(scene: &Scene, model: M, what: &str) {
         for engine in engines() {
             let (cpu, on_gpu) = both_with::<f64, _>(engine.open(), scene, model, 300, 2e-4);
@@ -665,7 +666,7 @@ fn particle_shifting_on_the_gpu_agrees_with_the_cpu() {
     scene.simulation.particle_shifting = 2.0;
     let model = StressModel(Newtonian { nu0: 0.001 }, KernelSum);
     let initial = initial_particles(&small_jet(), "test scene").expect("valid");
-    let mut unshifted = Simulation::<f64, _>::new(&small_jet(), &initial, model);
+    let mut unshifted = CpuSimulation::<f64, _>::new(&small_jet(), &initial, model);
     for _ in 0..300 {
         unshifted.step_with(2e-4, coil::simulation::time_step::Limit::Acoustic).expect("stable");
     }
@@ -700,7 +701,7 @@ fn a_gradient_estimate_on_the_gpu_agrees_with_the_cpu<G: GradientEstimate>(choic
     scene.material.viscosity.velocity_gradient = choice;
     let model = StressModel(Newtonian { nu0: 0.001 }, estimate);
     let initial = initial_particles(&small_jet(), "test scene").expect("valid");
-    let mut printed = Simulation::<f64, _>::new(&small_jet(), &initial, StressModel(Newtonian { nu0: 0.001 }, KernelSum));
+    let mut printed = CpuSimulation::<f64, _>::new(&small_jet(), &initial, StressModel(Newtonian { nu0: 0.001 }, KernelSum));
     for _ in 0..300 {
         printed.step_with(2e-4, coil::simulation::time_step::Limit::Acoustic).expect("stable");
     }
@@ -759,7 +760,7 @@ fn periodic_channels_on_the_gpu_agree_with_the_cpu() {
         (largest_position_difference(&c, &state_by_id(on_gpu.particles())), wrapped)
     }
     let start = {
-        let cpu = Simulation::<f64, _>::new(&scene, &initial, cross::<f64>(&scene));
+        let cpu = CpuSimulation::<f64, _>::new(&scene, &initial, cross::<f64>(&scene));
         state_by_id(cpu.particles())
     };
     let morris = ShearThinningMorrisModel(cross_law::<f64>(&scene.material.viscosity));
@@ -1017,7 +1018,7 @@ fn random_stages(engine: Engine, seed: u64) {
     // density is floored at rho0.
     let scene = dam_break();
     let initial = initial_particles(&scene, "dam_break.toml").expect("valid");
-    let mut fluid = Simulation::<f64, _>::new(&scene, &initial, cross::<f64>(&scene)).run.fluid;
+    let mut fluid = CpuSimulation::<f64, _>::new(&scene, &initial, cross::<f64>(&scene)).run.fluid;
     fluid.boundary_count = n as u32 / 4;
     fluid.wall_density_floor = fluid.rest_density;
     let rheology = cross_law::<f64>(&scene.material.viscosity);
@@ -1174,8 +1175,8 @@ fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
 /// Bytes the device holds once `model`'s run of `scene` is on it, and what the run counts (the figure `coil run` prints and docs/benchmark.md's memory table comes from).
 fn held_and_counted<R: Real, M: Model<R>>(scene: &Scene, model: M) -> (usize, usize) {
     let initial = initial_particles(scene, "dam_break.toml").expect("particles");
-    let mut on_gpu =
-        GpuSimulation::<R, M>::new_on_gpu(scene, &initial, model, Gpu::emulated_with_memory(usize::MAX)).expect("device state");
+    let mut on_gpu = GpuCpuSimulation::<R, M>::new_on_gpu(scene, &initial, model, Gpu::emulated_with_memory(usize::MAX))
+        .expect("device state");
     let (free, total) = on_gpu.backend.gpu().memory();
     (total - free, on_gpu.backend.memory_bytes())
 }

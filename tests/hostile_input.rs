@@ -3,6 +3,7 @@
 
 mod common;
 
+use coil::cpu::simulation::CpuSimulation;
 use coil::run::RunError;
 use coil::scene::particle_limit::ParticleLimit;
 use coil::scene::setup::{initial_particles, initial_particles_within};
@@ -310,11 +311,10 @@ fn resume_refuses_a_run_whose_earlier_frames_were_changed() {
 #[test]
 fn a_non_finite_value_stops_the_run_before_a_frame_holds_it() {
     use coil::simulation::model::StressModel;
-    use coil::simulation::Simulation;
     use coil_kernels::cross_viscosity::Newtonian;
     let scene = Scene::parse(&shipped("dam_break.toml"), "s.toml").expect("the dam break");
     let initial = initial_particles(&scene, "s.toml").expect("particles");
-    let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.05 }, KernelSum));
+    let mut sim = CpuSimulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.05 }, KernelSum));
     sim.step().expect("a step");
     let mut frame = coil::output::frame::Frame::default();
     frame.capture(&sim.run, sim.host());

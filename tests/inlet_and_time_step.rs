@@ -3,10 +3,10 @@
 
 mod common;
 
+use coil::cpu::simulation::CpuSimulation;
 use coil::scene::setup::initial_particles;
 use coil::simulation::model::StressModel;
 use coil::simulation::time_step::Limit;
-use coil::simulation::Simulation;
 use coil_kernels::cross_viscosity::Newtonian;
 use coil_kernels::velocity_gradient::KernelSum;
 use common::jet_scene;
@@ -14,7 +14,7 @@ use common::jet_scene;
 fn delivered_mass_rate(text: &str, nominal_area: f64) {
     let scene = common::scene(text);
     let initial = initial_particles(&scene, "jet.toml").expect("valid");
-    let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.001 }, KernelSum));
+    let mut sim = CpuSimulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.001 }, KernelSum));
     let duration = 0.2;
     while sim.run.time < duration - 1e-12 {
         let (dt, limit) = sim.next_dt();
@@ -63,7 +63,7 @@ fn the_nozzle_tube_pushes_the_jet_at_its_speed_when_the_jet_is_blocked() {
     );
     let scene = common::scene(&text);
     let initial = initial_particles(&scene, "jet.toml").expect("valid");
-    let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.01 }, KernelSum));
+    let mut sim = CpuSimulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.01 }, KernelSum));
     while sim.run.time < 0.1 {
         sim.step().expect("stable");
     }
@@ -92,7 +92,7 @@ fn the_nozzle_tube_pushes_the_jet_at_its_speed_when_the_jet_is_blocked() {
 /// by the plate, still drags on its neighbors.
 #[test]
 fn the_implicit_solve_holds_the_tube_fluid_at_the_jet_velocity() {
-    use coil::simulation::implicit_viscosity::{ImplicitModel, StressOperator};
+    use coil::simulation::implicit_weiler2018::{ImplicitModel, StressOperator};
     let text = common::set(
         &jet_scene("nozzle = { shape = \"circle\", radius_m = 0.006 }", "[[boundary]]\nshape = \"plate\"\nheight_m = -0.012"),
         &[
@@ -109,7 +109,7 @@ fn the_implicit_solve_holds_the_tube_fluid_at_the_jet_velocity() {
         max_iterations: 1000,
         picard_iterations: 0,
     };
-    let mut sim = Simulation::<f64, _>::new(&scene, &initial, model);
+    let mut sim = CpuSimulation::<f64, _>::new(&scene, &initial, model);
     while sim.run.time < 0.05 {
         sim.step().expect("stable");
     }
@@ -152,7 +152,7 @@ fn inlet_stops_at_the_particle_budget_and_moving_nozzle_follows_waypoints() {
     assert!((mid[0] - 0.01).abs() < 1e-12 && (v[0] - 0.2).abs() < 1e-12);
     assert_eq!(inlet.nozzle(0.5).0, [0.02, 0.0, 0.0], "held at the last waypoint");
     let initial = initial_particles(&scene, "jet.toml").expect("valid");
-    let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.001 }, KernelSum));
+    let mut sim = CpuSimulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.001 }, KernelSum));
     while sim.run.time < 0.2 {
         sim.step().expect("stable");
     }
@@ -172,7 +172,7 @@ fn particles_leaving_the_domain_are_removed_and_counted() {
     let text = jet_scene("nozzle = { shape = \"circle\", radius_m = 0.004 }", "");
     let scene = common::scene(&text);
     let initial = initial_particles(&scene, "jet.toml").expect("valid");
-    let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.001 }, KernelSum));
+    let mut sim = CpuSimulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.001 }, KernelSum));
     while sim.run.time < 0.6 {
         sim.step().expect("stable");
     }
@@ -187,12 +187,12 @@ fn automatic_dt_follows_equation_10() {
     let text = common::box_scene(0.02, [0.2; 3], [0.2; 3], "");
     let scene = common::scene(&text);
     let initial = initial_particles(&scene, "box.toml").expect("valid");
-    let sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.01 }, KernelSum));
+    let sim = CpuSimulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.01 }, KernelSum));
     // h = 0.04 m, c = 20 m/s, nu0 = 0.01 m^2/s: 0.1 h / c = 2e-4 s, 0.1 h^2 / (8 nu0) = 2e-3 s.
     let (dt, limit) = sim.next_dt();
     assert!((dt - 2e-4).abs() < 1e-15 && limit == Limit::Acoustic, "{dt} {limit:?}");
     let viscous = common::scene(&common::set(&text, &["material.viscosity.nu0_m2_s=1.0"]));
-    let sim = Simulation::<f64, _>::new(&viscous, &initial, StressModel(Newtonian { nu0: 1.0 }, KernelSum));
+    let sim = CpuSimulation::<f64, _>::new(&viscous, &initial, StressModel(Newtonian { nu0: 1.0 }, KernelSum));
     let (dt, limit) = sim.next_dt();
     assert!((dt - 2e-5).abs() < 1e-15 && limit == Limit::Viscous, "{dt} {limit:?}");
 }
@@ -227,7 +227,7 @@ fn a_safety_factor_above_one_is_refused_unless_overridden_and_then_scales_the_bo
     );
     let allowed = common::scene(&box_with_time_step(&["safety_factor=4.0", "allow_above_stability_bound=true"]));
     let initial = initial_particles(&allowed, "box.toml").expect("particles");
-    let sim = Simulation::<f64, _>::new(
+    let sim = CpuSimulation::<f64, _>::new(
         &allowed,
         &initial,
         StressModel(Newtonian { nu0: allowed.material.viscosity.nu0_m2_s }, KernelSum),

@@ -331,9 +331,9 @@ fn the_periodic_neighbor_loop_finds_exactly_the_nearest_images_within_h() {
         p.push(id, x, [0.0; 3]);
     }
     assert_eq!(grid.sort(&mut p), 0);
-    let period = grid.periodic.period;
+    let period = grid.cells.periodic.period;
     assert_eq!(period, [0.34, 0.0, 0.51]);
-    let nb = grid.neighborhood(p.position_view(), grid.periodic);
+    let nb = grid.neighborhood(p.position_view(), grid.cells.periodic);
     let image = |d: f64, l: f64| if l > 0.0 { d - l * (d / l).round() } else { d };
     let n = p.len();
     for i in 0..n {
@@ -392,9 +392,9 @@ fn the_neighbor_lists_visit_the_grids_neighbors_in_its_order_to_the_bit() {
         let other = kernels.corrected(1.01, 1.0, 1.0);
         let h2 = kernels.h2;
         let mut recorded = vec![[R::ZERO; 3]; p.len() * NEIGHBOR_SLOTS];
-        grid.record_neighbors(p.position_view(), kernels, &mut recorded, topology);
+        grid.sort.record_neighbors(&grid.cells, p.position_view(), kernels, &mut recorded, topology);
         let (listed, plain): (_, Neighborhood<T>) = (
-            grid.listed_neighborhood(p.position_view(), topology, kernels, &recorded),
+            grid.sort.listed_neighborhood(&grid.cells, p.position_view(), topology, kernels, &recorded),
             grid.neighborhood(p.position_view(), topology),
         );
         let (mut few, mut many) = (0, 0);
@@ -423,14 +423,14 @@ fn the_neighbor_lists_visit_the_grids_neighbors_in_its_order_to_the_bit() {
     }));
     for periodic in [[false; 3], [true, false, true]] {
         let mut grid = NeighborGrid::new(min, max, h, periodic, points.len());
-        grid.keep_neighbor_lists();
+        grid.sort.keep_neighbor_lists();
         let mut p = Particles::<f64>::with_capacity(points.len(), ModelFields::default());
         for (id, &x) in points.iter().enumerate() {
             p.push(id as u32, x, [0.0; 3]);
         }
         assert_eq!(grid.sort(&mut p), 0);
         if periodic[0] {
-            let topology = grid.periodic;
+            let topology = grid.cells.periodic;
             compare::<f32, _>(&mut grid, &p, h, topology);
             compare::<f64, _>(&mut grid, &p, h, topology);
         } else {
@@ -776,7 +776,7 @@ fn a_grid_of_many_scan_chunks_sorts_every_particle_into_its_cell() {
     use coil_kernels::cell_grid::hash;
     let n = 20_000;
     let mut grid = NeighborGrid::new([0.0; 3], [0.7; 3], 0.01, [false; 3], n);
-    assert_eq!(grid.grid.cell_count(), 343_000);
+    assert_eq!(grid.cells.grid.cell_count(), 343_000);
     let mut p = Particles::<f64>::with_capacity(n, ModelFields::default());
     let mut state = 5u64;
     for id in 0..n as u32 {
@@ -784,11 +784,11 @@ fn a_grid_of_many_scan_chunks_sorts_every_particle_into_its_cell() {
     }
     assert_eq!(grid.sort(&mut p), 0);
     let nb = grid.neighborhood(p.position_view(), Open);
-    let cells = grid.grid.cell_count() as usize;
+    let cells = grid.cells.grid.cell_count() as usize;
     assert_eq!(nb.cell_start.at(cells) as usize, n, "every particle is inside");
     for c in 0..cells {
         for i in nb.cell_start.at(c)..nb.cell_start.at(c + 1) {
-            assert_eq!(hash(i as usize, &grid.grid, &p.position_view()) as usize, c, "particle {i} in the run of cell {c}");
+            assert_eq!(hash(i as usize, &grid.cells.grid, &p.position_view()) as usize, c, "particle {i} in the run of cell {c}");
         }
     }
 }
@@ -963,8 +963,8 @@ fn the_velocity_gradient_skips_only_wall_particles_with_no_fluid_within_h() {
         let n = p.len();
         p.density[..n].iter_mut().for_each(|rho| *rho = 1000.0 + uniform(&mut state));
         let fluid = Fluid { boundary_count: walls, kernels: SmoothingKernels::new(h), ..fluid::<f64>() };
-        let tracked = grid.neighborhood(p.position_view(), grid.periodic);
-        let everywhere = vec![1u8; grid.grid.cell_count() as usize];
+        let tracked = grid.neighborhood(p.position_view(), grid.cells.periodic);
+        let everywhere = vec![1u8; grid.cells.grid.cell_count() as usize];
         let full = Neighborhood { near_fluid: View::new(&everywhere), ..tracked };
         let (velocity, density) = (vec3_view(&p.velocity, n), View::new(&p.density[..n]));
         let image = |d: f64, l: f64| if l > 0.0 { d - l * (d / l).round() } else { d };
@@ -974,7 +974,7 @@ fn the_velocity_gradient_skips_only_wall_particles_with_no_fluid_within_h() {
                 skipped += 1;
                 assert!(p.id[i] < walls, "fluid particle {} skipped", p.id[i]);
                 for j in (0..n).filter(|&j| p.id[j] >= walls) {
-                    let d = [0, 1, 2].map(|a| image(p.position[a][i] - p.position[a][j], grid.periodic.period[a]));
+                    let d = [0, 1, 2].map(|a| image(p.position[a][i] - p.position[a][j], grid.cells.periodic.period[a]));
                     assert!(
                         d[0] * d[0] + d[1] * d[1] + d[2] * d[2] >= h * h,
                         "wall particle {} skipped with fluid within h",
@@ -1107,7 +1107,7 @@ impl Ball {
     /// One implicit viscous step of kick `kick_dt` (s) from `velocity` (m/s, by axis), nu = 0.1
     /// m^2/s, no pressure and no gravity: the new velocities and how the solve went.
     fn implicit_step(&mut self, velocity: &[Vec<f64>; 3], kick_dt: f64, tolerance: f64) -> (Vec<Vec3<f64>>, SolveReport) {
-        use coil::simulation::implicit_viscosity::{ImplicitModel, StressOperator};
+        use coil::simulation::implicit_weiler2018::{ImplicitModel, StressOperator};
         let operator = StressOperator(Newtonian { nu0: 0.1 });
         self.implicit_step_of(
             ImplicitModel { operator, tolerance, max_iterations: 10_000, picard_iterations: 0 },
@@ -1340,7 +1340,7 @@ fn an_implicit_viscous_step_never_gains_energy_and_keeps_momentum_far_above_the_
 /// scrambled flow and so thickens the fluid, the solution misses its own system by far more.
 #[test]
 fn picard_iterations_solve_the_system_at_the_solutions_own_viscosity() {
-    use coil::simulation::implicit_viscosity::{ImplicitModel, StressOperator};
+    use coil::simulation::implicit_weiler2018::{ImplicitModel, StressOperator};
     use coil::simulation::particles::{stress_view_mut, vec3_view, view_mut};
     use coil_kernels::viscosity::implicit_weiler2018::{
         implicit_stress_pass, lagged_viscosity_pass, system_product_pass, ImplicitStressArgs, LaggedViscosityArgs,

@@ -3,6 +3,7 @@
 
 mod common;
 
+use coil::cpu::simulation::CpuSimulation;
 use coil::scene::setup::initial_particles;
 use coil::simulation::backend::Backend as _;
 use coil::simulation::model::{LaplacianModel, Model, StressModel};
@@ -18,13 +19,13 @@ const GRAVITY: &str = "material.gravity_m_s2=[0.0, -9.8, 0.0]";
 use coil_kernels::velocity_gradient::KernelSum;
 use coil_kernels::viscosity::stress_andrade2014::StressDivergence;
 
-fn simulation<M: Model<f64>>(text: &str, model: M) -> Simulation<f64, M> {
+fn simulation<M: Model<f64>>(text: &str, model: M) -> CpuSimulation<f64, M> {
     let scene = common::scene(text);
     let initial = initial_particles(&scene, "test.toml").expect("valid");
     Simulation::new(&scene, &initial, model)
 }
 
-fn position(sim: &Simulation<f64, impl Model<f64>>, i: usize) -> [f64; 3] {
+fn position(sim: &CpuSimulation<f64, impl Model<f64>>, i: usize) -> [f64; 3] {
     [0, 1, 2].map(|a| sim.particles().position[a][i])
 }
 
@@ -195,7 +196,7 @@ fn neighbor_search_equals_brute_force() {
 /// Also with implicit viscosity, whose dot products are summed over fixed ranges in order.
 #[test]
 fn results_do_not_depend_on_the_thread_count_or_the_calling_thread() {
-    use coil::simulation::implicit_viscosity::{ImplicitModel, StressOperator};
+    use coil::simulation::implicit_weiler2018::{ImplicitModel, StressOperator};
     let text = common::set(&common::box_scene(0.02, [0.3, 0.3, 0.2], [0.12, 0.2, 0.2], ""), &[GRAVITY]);
     let cross = Cross { nu0: 0.05, nu_inf: 0.005, k: 1.0, n: 1.0 };
     same_results_on_any_thread_count(&text, StressModel(cross, KernelSum));
@@ -241,7 +242,7 @@ fn water_dam_break_with_divergence_free_pressure(walls: &str) {
     ];
     let scene = common::scene(&common::set(&text, &water));
     let initial = initial_particles(&scene, "test.toml").expect("particles");
-    let mut sim = Simulation::<f32, _>::new(&scene, &initial, LaplacianModel(Newtonian { nu0: 1e-6 }));
+    let mut sim = CpuSimulation::<f32, _>::new(&scene, &initial, LaplacianModel(Newtonian { nu0: 1e-6 }));
     let s = scene.material.particle_spacing_m;
     while sim.run.time < 0.3 {
         sim.step().map_err(|e| e.instability()).expect("stable");
@@ -341,7 +342,7 @@ fn same_results_on_any_thread_count<M: Model<f64>>(text: &str, model: M) {
 /// implicit viscosity and solved pressure, which also read each pair's recorded gradient).
 #[test]
 fn the_cpu_neighbor_lists_give_the_grids_results_to_the_bit() {
-    use coil::simulation::implicit_viscosity::{ImplicitModel, StressOperator};
+    use coil::simulation::implicit_weiler2018::{ImplicitModel, StressOperator};
     use coil::simulation::model::{HourglassStressModel, ShearThinningMorrisModel};
     use coil_kernels::neighbor_list::NEIGHBOR_SLOTS;
     fn compare<M: Model<f64>>(what: &str, text: &str, model: M, steps: usize) {

@@ -2,10 +2,10 @@
 
 mod common;
 
+use coil::cpu::simulation::CpuSimulation;
 use coil::scene::setup::initial_particles;
 use coil::scene::Scene;
 use coil::simulation::model::StressModel;
-use coil::simulation::Simulation;
 use coil_kernels::cross_viscosity::Newtonian;
 use coil_kernels::velocity_gradient::KernelSum;
 use common::coil;
@@ -31,7 +31,7 @@ fn every_shipped_scene_loads_and_steps() {
         }
         let initial = initial_particles(&scene, &path.display().to_string()).unwrap_or_else(|e| panic!("{e}"));
         let nu0 = scene.material.viscosity.nu0_m2_s;
-        let mut sim = Simulation::<f32, _>::new(&scene, &initial, StressModel(Newtonian { nu0: nu0 as f32 }, KernelSum));
+        let mut sim = CpuSimulation::<f32, _>::new(&scene, &initial, StressModel(Newtonian { nu0: nu0 as f32 }, KernelSum));
         for _ in 0..3 {
             sim.step().unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         }
@@ -357,7 +357,7 @@ fn a_mistyped_field_is_named_as_set_spells_it() {
 /// rounding in binary; it is accepted and split into 3 cells. A period a spacing short is not.
 #[test]
 fn a_period_of_three_support_radii_written_in_decimal_is_accepted() {
-    use coil::cpu::neighbor_grid::NeighborGrid;
+    use coil::simulation::sorted_grid::SortedGrid;
     let text = |length: &str| {
         format!(
             "name = \"channel\"\n[material]\nparticle_spacing_m = 5e-5\n[material.viscosity]\nnu0_m2_s = 1e-6\n\
@@ -371,7 +371,7 @@ fn a_period_of_three_support_radii_written_in_decimal_is_accepted() {
     };
     let scene = Scene::parse(&text("0.0003"), "channel.toml").expect("a period of 3 h is valid");
     let d = &scene.domain;
-    let grid = NeighborGrid::new(d.min_m, d.max_m, scene.support_radius(), d.periodic, 1);
+    let grid = SortedGrid::new(d.min_m, d.max_m, scene.support_radius(), d.periodic);
     assert_eq!((grid.grid.dims[0], grid.grid.dims[2]), (3, 3));
     let e = Scene::parse(&text("0.00025"), "channel.toml").expect_err("5 spacings is 2.5 h");
     assert!(e.field == "domain.periodic" && e.reason.contains("less than 3 support radii"), "{e}");

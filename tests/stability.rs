@@ -3,6 +3,7 @@
 
 mod common;
 
+use coil::cpu::simulation::CpuSimulation;
 use coil::run::{run, RunError, Summary};
 use coil::scene::Scene;
 use coil::simulation::time_step::StabilityBound;
@@ -289,14 +290,13 @@ fn coarse_and_fine_spacing_run() {
 fn coincident_particles_get_finite_forces() {
     use coil::scene::setup::initial_particles;
     use coil::simulation::model::StressModel;
-    use coil::simulation::Simulation;
     use coil_kernels::cross_viscosity::Newtonian;
     let scene = Drop::new("nu0_m2_s = 0.01").scene();
     let mut initial = initial_particles(&scene, "drop.toml").expect("valid");
     let twin = initial.fluid[7];
     initial.fluid.push(twin);
     initial.fluid_velocity.push([0.1, 0.0, 0.0]);
-    let mut sim = Simulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.01 }, KernelSum));
+    let mut sim = CpuSimulation::<f64, _>::new(&scene, &initial, StressModel(Newtonian { nu0: 0.01 }, KernelSum));
     for _ in 0..50 {
         sim.step().expect("coincident particles do not blow up the run");
     }

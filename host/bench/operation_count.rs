@@ -3,10 +3,11 @@
 //! exp2 and log2 it does, on the CPU backend, which runs the very kernels the GPU runs. With a
 //! device's peak rate this gives the step's arithmetic floor (`coil bench`).
 
+use crate::cpu::simulation::CpuSimulation;
 use crate::scene::setup::InitialParticles;
 use crate::scene::Scene;
-use crate::simulation::model::{with_model, Model, WithModel};
-use crate::simulation::Simulation;
+use crate::simulation::model::Model;
+use crate::simulation::variant::{with_model, WithModel};
 use coil_kernels::real::Real;
 use std::cell::Cell;
 use std::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
@@ -163,8 +164,8 @@ struct CountStep<'a> {
 impl WithModel for CountStep<'_> {
     type Output = Result<StepOperations, String>;
     fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
-        let mut sim = Simulation::<R, M>::for_device(self.scene, self.initial, model);
-        let step = |sim: &mut Simulation<R, M>| {
+        let mut sim = CpuSimulation::<R, M>::for_device(self.scene, self.initial, model);
+        let step = |sim: &mut CpuSimulation<R, M>| {
             let (dt, limit) = sim.next_dt();
             sim.step_with(dt, limit).map_err(|i| format!("the counted step went unstable: {i}"))
         };

@@ -3,15 +3,15 @@
 
 pub mod neighbor_grid;
 pub mod parallel;
+pub mod simulation;
 
-use crate::cpu::neighbor_grid::NeighborGrid;
+use crate::cpu::neighbor_grid::GridSort;
 use crate::cpu::parallel::{launch, on_worker};
 use crate::simulation::backend::{Backend, ParticleViews, Passes, Readout, Schedule};
+use crate::simulation::host_particles::HostParticles;
 use crate::simulation::particle_array::ParticleArray;
-use crate::simulation::particles::{
-    mat3_view_mut, stress_view_mut, vec3_view, vec3_view_mut, view_mut, HostParticles, Particles,
-};
-use crate::simulation::Diagnostics;
+use crate::simulation::particles::{mat3_view_mut, stress_view_mut, vec3_view, vec3_view_mut, view_mut, Particles};
+use crate::simulation::sorted_grid::SortedGrid;
 use coil_kernels::acceleration::{acceleration_pass, AccelerationArgs};
 use coil_kernels::cell_grid::Neighbors;
 use coil_kernels::continuity_molteni2009::{continuity_pass, density_integration_pass, ContinuityArgs, DensityIntegrationArgs};
@@ -22,7 +22,7 @@ use coil_kernels::dfsph_bender2017::{
     warm_start_pass, DensityErrorArgs, DensityRateArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs,
     WarmStartArgs, ERROR_RANGE,
 };
-use coil_kernels::diagnostics::{range_figures, DiagnosticsArgs};
+use coil_kernels::diagnostics::{range_figures, DiagnosticsArgs, StateFigures};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::{leapfrog_pass, LeapfrogArgs};
 use coil_kernels::mirrored_wall::{mirrored_wall_pass, MirroredWallArgs};
@@ -67,6 +67,7 @@ pub enum NeighborVisits {
 
 pub struct CpuBackend<R> {
     host: HostParticles<R>,
+    sort: GridSort,
     /// The kernels of the pair passes: the lists hold the pairs within their support.
     kernels: SmoothingKernels<R>,
     /// `NEIGHBOR_SLOTS` per particle of capacity under `ListsAndGradients`, else empty.
@@ -79,19 +80,20 @@ impl<R: Real> CpuBackend<R> {
     /// The backend over `host`, with pair passes over `kernels`, visiting neighbors as
     /// `visits` says.
     pub fn new(
-        mut host: HostParticles<R>,
+        host: HostParticles<R>,
         wall_mirror: Option<[Vec<f64>; 3]>,
         kernels: SmoothingKernels<R>,
         visits: NeighborVisits,
     ) -> Self {
+        let mut sort = GridSort::new(&host.grid, host.particles.capacity());
         if visits != NeighborVisits::Grid {
-            host.grid.keep_neighbor_lists();
+            sort.keep_neighbor_lists();
         }
         let spiky_gradient = match visits {
             NeighborVisits::ListsAndGradients => ParticleArray::zeros(host.particles.capacity() * NEIGHBOR_SLOTS),
             _ => ParticleArray::default(),
         };
-        Self { host, kernels, spiky_gradient, wall_mirror }
+        Self { host, sort, kernels, spiky_gradient, wall_mirror }
     }
 
     /// The particles, to set a state by hand.
@@ -103,7 +105,7 @@ impl<R: Real> CpuBackend<R> {
     /// what `neighbors` builds over the positions.
     fn run_with<'a, T: Topology, N: Neighbors + Sync, S: Schedule<R>>(
         p: &'a mut Particles<R>,
-        grid: &'a NeighborGrid,
+        grid: &'a SortedGrid,
         topology: T,
         wall_mirror: Option<Vec3View<'a, f64>>,
         neighbors: impl FnOnce(Vec3View<'a, f64>) -> N,
@@ -158,14 +160,15 @@ impl<R: Real> Backend<R> for CpuBackend<R> {
     /// Also rebuilds the neighbor lists, where the backend keeps them.
     fn sort_and_reorder(&mut self) -> Result<usize, Infallible> {
         let HostParticles { particles, grid } = &mut self.host;
-        let removed = grid.sort(particles);
-        if grid.keeps_neighbor_lists() {
+        let sort = &mut self.sort;
+        let removed = sort.sort(grid, particles);
+        if sort.keeps_neighbor_lists() {
             let position = vec3_view(&particles.position, particles.len());
             let (kernels, gradient) = (self.kernels, &mut self.spiky_gradient[..]);
             if grid.is_periodic() {
-                grid.record_neighbors(position, kernels, gradient, grid.periodic);
+                sort.record_neighbors(grid, position, kernels, gradient, grid.periodic);
             } else {
-                grid.record_neighbors(position, kernels, gradient, Open);
+                sort.record_neighbors(grid, position, kernels, gradient, Open);
             }
         }
         Ok(removed)
@@ -175,9 +178,9 @@ impl<R: Real> Backend<R> for CpuBackend<R> {
         let HostParticles { particles, grid } = &mut self.host;
         let grid = &*grid;
         let mirror = self.wall_mirror.as_ref().map(|m| Vec3View::new(&m[0], &m[1], &m[2]));
-        if grid.keeps_neighbor_lists() {
-            let (kernels, gradient) = (self.kernels, &self.spiky_gradient[..]);
-            let lists = |position| grid.listed_neighborhood(position, topology, kernels, gradient);
+        if self.sort.keeps_neighbor_lists() {
+            let (sort, kernels, gradient) = (&self.sort, self.kernels, &self.spiky_gradient[..]);
+            let lists = |position| sort.listed_neighborhood(grid, position, topology, kernels, gradient);
             Self::run_with(particles, grid, topology, mirror, lists, schedule);
         } else {
             let cells = |position| grid.neighborhood(position, topology);
@@ -198,7 +201,7 @@ impl<R: Real> Backend<R> for CpuBackend<R> {
         let figures = (0..n.div_ceil(DIAGNOSTICS_RANGE))
             .into_par_iter()
             .map(|r| range_figures(r, DIAGNOSTICS_RANGE, n, &args))
-            .reduce(Diagnostics::default, Diagnostics::combine);
+            .reduce(StateFigures::default, StateFigures::combine);
         Ok(Readout { figures, live: n })
     }
 
@@ -218,7 +221,7 @@ impl<R: Real> Backend<R> for CpuBackend<R> {
         let mirror = self.wall_mirror.as_ref().map_or(0, |m| 3 * m[0].len() * std::mem::size_of::<f64>());
         let p = &self.host.particles;
         let gradients = self.spiky_gradient.len() * std::mem::size_of::<[R; 3]>();
-        p.capacity() * p.bytes_per_particle() + self.host.grid.bytes() + mirror + gradients
+        p.capacity() * p.bytes_per_particle() + self.host.grid.bytes() + self.sort.bytes() + mirror + gradients
     }
 }
 

@@ -1,11 +1,12 @@
-//! Drives the neighbor grid on the CPU: hashing, the counting sort and the reorder of every
-//! particle field (Algorithm 1, line 3), and the CPU backend's neighbor lists. Also drops
+//! Sorts particles into their grid on the CPU: hashing, the counting sort and the reorder of
+//! every particle field (Algorithm 1, line 3), and the CPU backend's neighbor lists. Also drops
 //! particles that left the domain box.
 
 use crate::cpu::parallel::launch;
 use crate::simulation::particle_array::ParticleArray;
 use crate::simulation::particles::{view_mut, Particles};
-use coil_kernels::cell_grid::{hash_pass, CellGrid, HashArgs, Neighborhood};
+use crate::simulation::sorted_grid::SortedGrid;
+use coil_kernels::cell_grid::{hash_pass, HashArgs, Neighborhood};
 use coil_kernels::counting_sort::{
     chunk_total, count_particle, gather, scan_by_levels, scan_chunk, scan_chunk_in_place, scan_chunk_offsets, scan_levels_len,
     scatter, sort_bucket, sum_chunk, Counters, ScanStep,
@@ -13,7 +14,7 @@ use coil_kernels::counting_sort::{
 use coil_kernels::fluid_cells::{holds_fluid_pass, near_fluid_pass, HoldsFluidArgs, NearFluidArgs};
 use coil_kernels::neighbor_list::{neighbor_list_pass, ListedNeighborhood, NeighborListArgs, NEIGHBOR_SLOTS};
 use coil_kernels::smoothing::SmoothingKernels;
-use coil_kernels::topology::{Open, Periodic, Topology, PERIODIC_ROUNDING};
+use coil_kernels::topology::{Open, Topology};
 use coil_kernels::view::{Vec3View, View, ViewMut};
 use coil_kernels::Real;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -21,85 +22,50 @@ use std::sync::atomic::{AtomicU32, Ordering};
 /// Buckets per scan chunk.
 pub const SCAN_CHUNK: usize = 4096;
 
-pub struct NeighborGrid {
-    pub grid: CellGrid,
-    /// The domain's periods (0 along open axes; all 0 for an open domain).
-    pub periodic: Periodic,
+/// The CPU's arrays for sorting particles into a [`SortedGrid`], and its neighbor lists.
+pub struct GridSort {
     cell_key: ParticleArray<u32>,
     counters: Vec<AtomicU32>,
-    cell_start: Vec<u32>,
     order: ParticleArray<u32>,
     /// The chunk totals, then the levels of their scan (`counting_sort::scan_levels`).
     chunk_offsets: Vec<u32>,
-    /// Per cell: whether it holds fluid (allocated by `track_fluid`), then whether it lies near
-    /// fluid (`fluid_cells`).
+    /// Per cell, whether it holds fluid, where the grid tracks fluid (`fluid_cells`).
     holds_fluid: Vec<u8>,
-    near_fluid: Vec<u8>,
-    /// Ids below this are fixed boundary particles at rest, whose cells each sort marks; `None`
-    /// marks every cell near fluid.
-    resting_boundary: Option<u32>,
     /// `NEIGHBOR_SLOTS` per particle of capacity once `keep_neighbor_lists` allocates them.
     neighbor_list: ParticleArray<u32>,
 }
 
-impl NeighborGrid {
-    /// A grid of cells of edge `cell_size` (m, the support radius) over the domain box; along
-    /// the axes marked `periodic` the box length is split into whole cells of at least that edge,
-    /// less `PERIODIC_ROUNDING` of it.
-    pub fn new(min: [f64; 3], max: [f64; 3], cell_size: f64, periodic: [bool; 3], capacity: usize) -> Self {
-        let length = [0, 1, 2].map(|a| max[a] - min[a]);
-        let dims = [0, 1, 2].map(|a| {
-            let cells = length[a] / cell_size;
-            (if periodic[a] { (cells * (1.0 + PERIODIC_ROUNDING)).floor() } else { cells.ceil() } as u32).max(1)
-        });
-        let inverse_cell_size = [0, 1, 2].map(|a| if periodic[a] { dims[a] as f64 / length[a] } else { 1.0 / cell_size });
-        let grid = CellGrid { origin: min, inverse_cell_size, dims };
-        let periodic = Periodic { origin: min, period: [0, 1, 2].map(|a| if periodic[a] { length[a] } else { 0.0 }) };
-        let buckets = grid.cell_count() as usize + 1;
+impl GridSort {
+    /// The arrays to sort up to `capacity` particles into `cells`.
+    pub fn new(cells: &SortedGrid, capacity: usize) -> Self {
+        let buckets = cells.buckets();
         Self {
-            grid,
-            periodic,
             cell_key: ParticleArray::zeros(capacity),
             counters: (0..buckets).map(|_| AtomicU32::new(0)).collect(),
-            cell_start: vec![0; buckets + 1],
             order: ParticleArray::zeros(capacity),
             chunk_offsets: vec![0; scan_levels_len(buckets.div_ceil(SCAN_CHUNK))],
-            holds_fluid: Vec::new(),
-            near_fluid: vec![1; buckets - 1],
-            resting_boundary: None,
+            holds_fluid: if cells.tracks_fluid().is_some() { vec![0; buckets - 1] } else { Vec::new() },
             neighbor_list: ParticleArray::default(),
         }
     }
 
-    /// From the next sort on, marks the cells near fluid, for particles whose ids below
-    /// `boundary_count` are fixed boundary particles that stay at rest (not mirrored walls).
-    pub fn track_fluid(&mut self, boundary_count: u32) {
-        self.resting_boundary = Some(boundary_count);
-        self.holds_fluid = vec![0; self.near_fluid.len()];
-    }
-
-    /// The boundary count the sorts mark the cells near fluid by; `None` where every cell
-    /// counts as near fluid.
-    pub fn tracks_fluid(&self) -> Option<u32> {
-        self.resting_boundary
-    }
-
     /// Allocates the neighbor lists (`coil_kernels::neighbor_list`) for every particle of
-    /// capacity, so that `record_neighbors` can fill them: on the CPU backend only.
+    /// capacity, so that `record_neighbors` can fill them.
     pub fn keep_neighbor_lists(&mut self) {
         self.neighbor_list = ParticleArray::zeros(self.order.len() * NEIGHBOR_SLOTS);
     }
 
-    /// Whether the grid keeps neighbor lists.
+    /// Whether the sort keeps neighbor lists.
     pub fn keeps_neighbor_lists(&self) -> bool {
         !self.neighbor_list.is_empty()
     }
 
-    /// Records the neighbors within `kernels.h` of the sorted particles at `position`, in
-    /// topology `topology`, when the grid keeps lists, and each listed pair's spiky gradient
-    /// into `spiky_gradient` where it is not empty (`NEIGHBOR_SLOTS` per particle).
+    /// Records the neighbors within `kernels.h` of the particles at `position`, sorted into
+    /// `cells`, in topology `topology`, when the sort keeps lists, and each listed pair's spiky
+    /// gradient into `spiky_gradient` where it is not empty (`NEIGHBOR_SLOTS` per particle).
     pub fn record_neighbors<R: Real, T: Topology>(
         &mut self,
+        cells: &SortedGrid,
         position: Vec3View<f64>,
         kernels: SmoothingKernels<R>,
         spiky_gradient: &mut [[R; 3]],
@@ -109,47 +75,46 @@ impl NeighborGrid {
             return;
         }
         let n = position.x.len();
-        let mut list = std::mem::take(&mut self.neighbor_list);
         let gradients = if spiky_gradient.is_empty() { 0 } else { n * NEIGHBOR_SLOTS };
         let args = NeighborListArgs {
-            neighborhood: self.neighborhood(position, topology),
+            neighborhood: cells.neighborhood(position, topology),
             kernels,
-            list: view_mut(&mut list, n * NEIGHBOR_SLOTS),
+            list: view_mut(&mut self.neighbor_list, n * NEIGHBOR_SLOTS),
             spiky_gradient: view_mut(spiky_gradient, gradients),
         };
         launch(n, |i| neighbor_list_pass(i, &args));
-        self.neighbor_list = list;
     }
 
     /// The neighbors of the particles at `position` as the last `record_neighbors` over these
-    /// positions found them, with the gradients it recorded with `kernels`, for a grid that
+    /// positions found them, with the gradients it recorded with `kernels`, for a sort that
     /// keeps lists.
     pub fn listed_neighborhood<'a, R: Real, T: Topology>(
         &'a self,
+        cells: &'a SortedGrid,
         position: Vec3View<'a, f64>,
         topology: T,
         kernels: SmoothingKernels<R>,
         spiky_gradient: &'a [[R; 3]],
     ) -> ListedNeighborhood<'a, T, R> {
         ListedNeighborhood {
-            grid: self.neighborhood(position, topology),
+            grid: cells.neighborhood(position, topology),
             list: View::new(&self.neighbor_list),
             kernels,
             spiky_gradient: View::new(spiky_gradient),
         }
     }
 
-    /// Bytes of the grid's own arrays.
+    /// Bytes of the sort's own arrays.
     pub fn bytes(&self) -> usize {
-        4 * (self.cell_key.len() + self.counters.len() + self.cell_start.len() + self.order.len() + self.neighbor_list.len())
+        4 * (self.cell_key.len() + self.counters.len() + self.order.len() + self.chunk_offsets.len() + self.neighbor_list.len())
             + self.holds_fluid.len()
-            + self.near_fluid.len()
     }
 
-    /// Sorts the particles by cell, dropping those outside the domain; returns how many left.
-    pub fn sort<R: Real>(&mut self, p: &mut Particles<R>) -> usize {
+    /// Sorts the particles into `cells`, dropping those outside the domain; returns how many
+    /// left.
+    pub fn sort<R: Real>(&mut self, cells: &mut SortedGrid, p: &mut Particles<R>) -> usize {
         let n = p.len();
-        let grid = self.grid;
+        let grid = cells.grid;
         let args = HashArgs { grid, position: p.position_view(), cell_key: view_mut(&mut self.cell_key, n) };
         launch(n, |i| hash_pass(i, &args));
 
@@ -183,71 +148,70 @@ impl NeighborGrid {
         });
         let Ok(()) = scanned;
         let offsets = totals.read();
-        let starts = ViewMut::new(&mut self.cell_start);
+        let starts = ViewMut::new(cells.cell_start_mut());
         launch(chunks, |c| scan_chunk(c, SCAN_CHUNK, offsets.at(c), counters, starts));
 
         let order = view_mut(&mut self.order, n);
         launch(n, |i| scatter(i, keys, counters, order));
-        let starts = View::new(&self.cell_start);
+        let starts = View::new(cells.cell_start_mut());
         launch(grid.cell_count() as usize, |c| sort_bucket(c, starts, order));
 
-        let live = self.cell_start[grid.cell_count() as usize] as usize;
+        let live = cells.live();
         reorder(p, View::new(&self.order[..live]), live);
-        self.mark_cells_near_fluid(View::new(&p.id[..live]));
+        self.mark_cells_near_fluid(cells, View::new(&p.id[..live]));
         n - live
     }
 
     /// The `fluid_cells` passes over the sorted particles' ids, when the grid tracks fluid.
-    fn mark_cells_near_fluid(&mut self, id: View<u32>) {
-        let Some(boundary_count) = self.resting_boundary else {
+    fn mark_cells_near_fluid(&mut self, cells: &mut SortedGrid, id: View<u32>) {
+        let Some(boundary_count) = cells.tracks_fluid() else {
             return;
         };
-        let cells = self.holds_fluid.len();
-        let args = HoldsFluidArgs {
-            cell_start: View::new(&self.cell_start),
-            id,
-            boundary_count,
-            holds_fluid: ViewMut::new(&mut self.holds_fluid),
-        };
-        launch(cells, |c| holds_fluid_pass(c, &args));
-        let periodic = self.is_periodic();
-        let (grid, cell_start) = (self.grid, View::new(&self.cell_start));
-        let (holds_fluid, near_fluid) = (View::new(&self.holds_fluid), ViewMut::new(&mut self.near_fluid));
+        let (grid, periodic, topology) = (cells.grid, cells.is_periodic(), cells.periodic);
+        let (cell_start, near_fluid) = cells.starts_and_marks();
+        let count = self.holds_fluid.len();
+        let args = HoldsFluidArgs { cell_start, id, boundary_count, holds_fluid: ViewMut::new(&mut self.holds_fluid) };
+        launch(count, |c| holds_fluid_pass(c, &args));
+        let (holds_fluid, near_fluid) = (View::new(&self.holds_fluid), ViewMut::new(near_fluid));
         if periodic {
-            let args = NearFluidArgs { grid, topology: self.periodic, cell_start, holds_fluid, near_fluid };
-            launch(cells, |c| near_fluid_pass(c, &args));
+            let args = NearFluidArgs { grid, topology, cell_start, holds_fluid, near_fluid };
+            launch(count, |c| near_fluid_pass(c, &args));
         } else {
             let args = NearFluidArgs { grid, topology: Open, cell_start, holds_fluid, near_fluid };
-            launch(cells, |c| near_fluid_pass(c, &args));
+            launch(count, |c| near_fluid_pass(c, &args));
         }
     }
+}
 
-    /// The start of each cell's run, for a backend that sorted elsewhere to fill in.
-    #[cfg(feature = "cuda")]
-    pub(crate) fn cell_start_mut(&mut self) -> &mut [u32] {
-        &mut self.cell_start
+/// A sorted grid with the CPU's sort: kernels run by hand over particles that no backend
+/// holds (tests, checks).
+pub struct NeighborGrid {
+    pub cells: SortedGrid,
+    pub sort: GridSort,
+}
+
+impl NeighborGrid {
+    /// See [`SortedGrid::new`]; room for `capacity` particles.
+    pub fn new(min: [f64; 3], max: [f64; 3], cell_size: f64, periodic: [bool; 3], capacity: usize) -> Self {
+        let cells = SortedGrid::new(min, max, cell_size, periodic);
+        let sort = GridSort::new(&cells, capacity);
+        Self { cells, sort }
     }
 
-    /// The near-fluid marks, for a backend that sorted elsewhere to fill in.
-    #[cfg(feature = "cuda")]
-    pub(crate) fn near_fluid_mut(&mut self) -> &mut [u8] {
-        &mut self.near_fluid
+    /// See [`SortedGrid::track_fluid`].
+    pub fn track_fluid(&mut self, boundary_count: u32) {
+        self.cells.track_fluid(boundary_count);
+        self.sort = GridSort::new(&self.cells, self.sort.order.len());
     }
 
-    /// Whether any axis wraps.
-    pub fn is_periodic(&self) -> bool {
-        self.periodic.period.iter().any(|&l| l > 0.0)
+    /// Sorts the particles by cell, dropping those outside the domain; returns how many left.
+    pub fn sort<R: Real>(&mut self, p: &mut Particles<R>) -> usize {
+        self.sort.sort(&mut self.cells, p)
     }
 
     /// The sorted grid for the particles' current order, in topology `topology`.
     pub fn neighborhood<'a, T: Topology>(&'a self, position: Vec3View<'a, f64>, topology: T) -> Neighborhood<'a, T> {
-        Neighborhood {
-            grid: self.grid,
-            cell_start: View::new(&self.cell_start),
-            position,
-            topology,
-            near_fluid: View::new(&self.near_fluid),
-        }
+        self.cells.neighborhood(position, topology)
     }
 }
 

@@ -3,8 +3,9 @@
 use crate::output::points::{encode_ply, encode_xyz};
 use crate::output::vtu::{encode, Field};
 use crate::scene::VtuEncoding;
+use crate::simulation::host_particles::HostParticles;
 use crate::simulation::model::Model;
-use crate::simulation::particles::{vec3_view, HostParticles};
+use crate::simulation::particles::vec3_view;
 use crate::simulation::RunState;
 use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::velocity_gradient::{rate_of_deformation, shear_rate, GradientEstimate};

@@ -10,8 +10,8 @@ use crate::output::surface::{mesh_path, reconstruct, Fluid, MeshFormat, SurfaceP
 use crate::output::vtu::PvdSeries;
 use crate::output::write_atomically;
 use crate::scene::{FrameFormat, Scene};
+use crate::simulation::host_particles::HostParticles;
 use crate::simulation::model::Model;
-use crate::simulation::particles::HostParticles;
 use crate::simulation::{Instability, RunState};
 use coil_kernels::Real;
 use std::path::{Path, PathBuf};

@@ -14,7 +14,7 @@ mod time_loop;
 use crate::run::run_log::{resolved, BackendName, Resumed, RunLog, Status};
 use crate::scene::setup::initial_particles;
 use crate::scene::{Precision, Scene, SceneError};
-use crate::simulation::model::with_precision_and_model;
+use crate::simulation::variant::with_precision_and_model;
 use crate::simulation::Instability;
 use checkpoint::Checkpoint;
 use std::fmt;

@@ -4,8 +4,9 @@
 //! is refused with its numbers instead of aborting in the allocator.
 
 use crate::scene::Scene;
-use crate::simulation::model::{with_precision_and_model, Model, WithModel};
+use crate::simulation::model::Model;
 use crate::simulation::particles::Particles;
+use crate::simulation::variant::{with_precision_and_model, WithModel};
 use coil_kernels::neighbor_list::NEIGHBOR_SLOTS;
 use coil_kernels::Real;
 

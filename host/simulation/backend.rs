@@ -4,8 +4,8 @@
 //! The order of the passes is not here: [`super::Simulation::step_with`] writes it once, for
 //! every backend, over this interface.
 
-use super::Diagnostics;
-use crate::simulation::particles::{HostParticles, Particles};
+use crate::simulation::host_particles::HostParticles;
+use crate::simulation::particles::{ImplicitViews, Particles, PressureViews};
 use coil_kernels::acceleration::AccelerationArgs;
 use coil_kernels::cell_grid::{Neighborhood, Neighbors};
 use coil_kernels::continuity_molteni2009::{ContinuityArgs, DensityIntegrationArgs};
@@ -14,6 +14,7 @@ use coil_kernels::density::{DensityArgs, DensityKernel};
 use coil_kernels::dfsph_bender2017::{
     DensityErrorArgs, DensityRateArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, WarmStartArgs,
 };
+use coil_kernels::diagnostics::StateFigures;
 use coil_kernels::fluid::Fluid;
 use coil_kernels::leapfrog::LeapfrogArgs;
 use coil_kernels::mirrored_wall::MirroredWallArgs;
@@ -118,36 +119,6 @@ pub struct ParticleViews<'a, R, T, N> {
     pub pressure_solve: Option<PressureViews<'a, R>>,
 }
 
-/// The implicit viscosity solve's arrays as views (`coil_kernels::viscosity::implicit_weiler2018`).
-#[derive(Clone, Copy)]
-pub struct ImplicitViews<'a, R> {
-    /// The last step's v - v*, carried from step to step (m/s).
-    pub viscous_change: Vec3ViewMut<'a, R>,
-    pub predicted: Vec3ViewMut<'a, R>,
-    pub solution: Vec3ViewMut<'a, R>,
-    pub residual: Vec3ViewMut<'a, R>,
-    pub preconditioned: Vec3ViewMut<'a, R>,
-    pub direction: Vec3ViewMut<'a, R>,
-    pub product: Vec3ViewMut<'a, R>,
-    pub block: SymTensorViewMut<'a, R>,
-    /// One entry per range of `DOT_RANGE` particles.
-    pub partial_dots: ViewMut<'a, [f64; 2]>,
-}
-
-/// The divergence-free pressure solves' arrays as views (`coil_kernels::dfsph_bender2017`).
-#[derive(Clone, Copy)]
-pub struct PressureViews<'a, R> {
-    pub factor: ViewMut<'a, R>,
-    pub stiffness: ViewMut<'a, R>,
-    pub error: ViewMut<'a, R>,
-    /// The divergence solve's stiffness sums, carried from step to step.
-    pub divergence_sum: ViewMut<'a, R>,
-    /// The density solve's stiffness sums, carried from step to step: p / rho^2.
-    pub density_sum: ViewMut<'a, R>,
-    /// One entry per range of `ERROR_RANGE` particles.
-    pub partial_sums: ViewMut<'a, [f64; 2]>,
-}
-
 /// A sequence of passes over a backend's views, generic over how it visits neighbors: a
 /// solver's schedule (or part of it), written once for every backend.
 pub trait Schedule<R: Real> {
@@ -157,7 +128,7 @@ pub trait Schedule<R: Real> {
 /// The diagnostics reduction's result with the particle count it saw.
 #[derive(Debug, Clone, Copy)]
 pub struct Readout {
-    pub figures: Diagnostics,
+    pub figures: StateFigures,
     /// Live particles, boundary included.
     pub live: usize,
 }

@@ -2,23 +2,26 @@
 //! through Algorithm 1 by one schedule that every backend runs.
 
 pub mod backend;
-pub mod divergence_free;
-pub mod implicit_viscosity;
+pub mod dfsph_bender2017;
+pub mod host_particles;
+pub mod implicit_weiler2018;
 pub mod inlet;
 pub mod model;
 pub mod particle_array;
 pub mod particles;
 pub mod run_state;
+pub mod sorted_grid;
 pub mod time_step;
+pub mod variant;
 
-use crate::cpu::neighbor_grid::NeighborGrid;
-use crate::cpu::{CpuBackend, NeighborVisits};
 use crate::scene::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, rest_volume, InitialParticles};
 use crate::scene::{DensityKernelKind, Pressure, Scene, ViscositySolver, ViscousVelocity, Walls};
-use crate::simulation::divergence_free::PressureSolve;
+use crate::simulation::dfsph_bender2017::PressureSolve;
+use crate::simulation::host_particles::HostParticles;
 use crate::simulation::inlet::Inlet;
 use crate::simulation::model::{ImplicitStep, Model, ParticleState, SolveReport};
-use crate::simulation::particles::{HostParticles, Particles};
+use crate::simulation::particles::Particles;
+use crate::simulation::sorted_grid::SortedGrid;
 use crate::simulation::time_step::{Cfl, Limit, StabilityBound, TimeStepper};
 use backend::{Backend, ParticleViews, Passes, Schedule};
 use coil_kernels::cell_grid::Neighbors;
@@ -177,7 +180,7 @@ impl StepError<std::convert::Infallible> {
 
 /// A run on backend `B`: the run state, which every backend shares, and the particles, which
 /// `B` holds.
-pub struct Simulation<R: Real, M: Model<R>, B = CpuBackend<R>> {
+pub struct Simulation<R: Real, M: Model<R>, B> {
     pub run: RunState<R, M>,
     pub backend: B,
 }
@@ -287,49 +290,11 @@ impl<R: Real, M: Model<R>> Setup<R, M> {
         };
         let wall_mirror = (scene.simulation.walls == Walls::Mirrored)
             .then(|| [0, 1, 2].map(|a| initial.boundary_mirror.iter().map(|m| m[a]).collect()));
-        let mut grid = NeighborGrid::new(d.min_m, d.max_m, h, d.periodic, boundary_count + fluid_capacity);
+        let mut grid = SortedGrid::new(d.min_m, d.max_m, h, d.periodic);
         if wall_mirror.is_none() {
             grid.track_fluid(boundary_count as u32);
         }
         Self { run, host: HostParticles { particles, grid }, wall_mirror }
-    }
-}
-
-impl<R: Real, M: Model<R>> Simulation<R, M> {
-    /// Sets up a run of `scene` with the particles `initial` on the CPU backend.
-    pub fn new(scene: &Scene, initial: &InitialParticles, model: M) -> Self {
-        Self::started(Setup::new(scene, initial, model), true)
-    }
-
-    /// A run on the CPU backend that visits neighbors through the grid, as a device does, not
-    /// through lists: for counting the device's work, and for checking that both loops agree.
-    pub fn for_device(scene: &Scene, initial: &InitialParticles, model: M) -> Self {
-        Self::started(Setup::new(scene, initial, model), false)
-    }
-
-    fn started(setup: Setup<R, M>, lists: bool) -> Self {
-        let mut sim = Self::on_cpu(setup, lists);
-        let Ok(()) = sim.sort_and_density();
-        sim
-    }
-
-    /// The run `setup` on the CPU, with neighbor lists or not; fresh runs then start with
-    /// [`Self::sort_and_density`]. The lists also hold each pair's kernel gradient where a
-    /// solver visits the neighbors many times a step (implicit viscosity, solved pressure).
-    pub fn on_cpu(setup: Setup<R, M>, lists: bool) -> Self {
-        let Setup { run, host, wall_mirror } = setup;
-        let visits = match lists {
-            false => NeighborVisits::Grid,
-            true if M::FIELDS.implicit || run.pressure_solve.is_some() => NeighborVisits::ListsAndGradients,
-            true => NeighborVisits::Lists,
-        };
-        let backend = CpuBackend::new(host, wall_mirror, run.fluid.kernels, visits);
-        Self { run, backend }
-    }
-
-    /// The particles, to set a state by hand (checks, tests).
-    pub fn particles_mut(&mut self) -> &mut Particles<R> {
-        self.backend.particles_mut()
     }
 }
 

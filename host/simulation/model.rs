@@ -4,19 +4,18 @@
 //! shear-thinning one per particle. Each is a type, so the CPU loops and the GPU kernels of a run contain only the
 //! physics it uses.
 
-use crate::scene::{Precision, Scene, VelocityGradient, Viscosity, ViscosityOperator, ViscositySolver};
-use crate::simulation::backend::{ImplicitViews, Passes};
-use crate::simulation::implicit_viscosity::{ImplicitModel, MorrisOperator, ShearThinningMorrisOperator, StressOperator};
+use crate::scene::Viscosity;
+use crate::simulation::backend::Passes;
 use crate::simulation::inlet::Inlet;
+use crate::simulation::particles::ImplicitViews;
 pub use crate::simulation::particles::ModelFields;
 use coil_kernels::acceleration::AccelerationArgs;
 use coil_kernels::cell_grid::{Neighborhood, Neighbors};
 use coil_kernels::cross_viscosity::{Cross, Newtonian, Rheology};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::nozzle::NozzleTube;
-use coil_kernels::renormalization_bonet1999::Renormalized;
 use coil_kernels::topology::{Open, Topology};
-use coil_kernels::velocity_gradient::{GradientEstimate, KernelSum, OwnDensity};
+use coil_kernels::velocity_gradient::{GradientEstimate, KernelSum};
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::viscosity::hourglass_ganzenmuller2015::{HourglassControlledStress, VelocityGradientArgs};
 use coil_kernels::viscosity::laplacian_morris1997::MorrisViscosity;
@@ -115,67 +114,6 @@ impl<'a, R: Real, N: Neighbors> ParticleState<'a, R, N> {
             density: self.density,
             acceleration: self.acceleration,
         }
-    }
-}
-
-/// Work done once per physics variant, monomorphised for it (`run`, `check`).
-pub trait WithModel {
-    type Output;
-    fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output;
-}
-
-/// Picks the physics variant of `scene` once, outside every particle loop, and hands it to `work`.
-pub fn with_model<R: Real, W: WithModel>(scene: &Scene, work: W) -> W::Output {
-    let v = &scene.material.viscosity;
-    let nu0 = R::from_f64(v.nu0_m2_s);
-    let hourglass = R::from_f64(v.hourglass_control);
-    if v.solver == ViscositySolver::Implicit {
-        return match (v.operator, v.is_newtonian()) {
-            (ViscosityOperator::Morris, true) => work.with::<R, _>(implicit(MorrisOperator(Newtonian { nu0 }), v)),
-            (ViscosityOperator::Morris, false) => work.with::<R, _>(implicit(ShearThinningMorrisOperator(cross_law(v)), v)),
-            (_, true) => work.with::<R, _>(implicit(StressOperator(Newtonian { nu0 }), v)),
-            (_, false) => work.with::<R, _>(implicit(StressOperator(cross_law(v)), v)),
-        };
-    }
-    match (v.operator, v.is_newtonian()) {
-        (ViscosityOperator::Stress, true) if v.hourglass_control > 0.0 => {
-            work.with::<R, _>(HourglassStressModel { rheology: Newtonian { nu0 }, coefficient: hourglass })
-        }
-        (ViscosityOperator::Stress, false) if v.hourglass_control > 0.0 => {
-            work.with::<R, _>(HourglassStressModel { rheology: cross_law(v), coefficient: hourglass })
-        }
-        (ViscosityOperator::Laplacian, _) => work.with::<R, _>(LaplacianModel(Newtonian { nu0 })),
-        (ViscosityOperator::Morris, true) => work.with::<R, _>(MorrisModel(Newtonian { nu0 })),
-        (ViscosityOperator::Morris, false) => work.with::<R, _>(ShearThinningMorrisModel(cross_law(v))),
-        (ViscosityOperator::Stress, true) => match v.velocity_gradient {
-            VelocityGradient::Sph => work.with::<R, _>(StressModel(Newtonian { nu0 }, KernelSum)),
-            VelocityGradient::Renormalized => work.with::<R, _>(StressModel(Newtonian { nu0 }, Renormalized)),
-            VelocityGradient::OwnDensity => work.with::<R, _>(StressModel(Newtonian { nu0 }, OwnDensity)),
-        },
-        (ViscosityOperator::Stress, false) => match v.velocity_gradient {
-            VelocityGradient::Sph => work.with::<R, _>(StressModel(cross_law(v), KernelSum)),
-            VelocityGradient::Renormalized => work.with::<R, _>(StressModel(cross_law(v), Renormalized)),
-            VelocityGradient::OwnDensity => work.with::<R, _>(StressModel(cross_law(v), OwnDensity)),
-        },
-    }
-}
-
-/// Viscosity `v` solved implicitly with `operator`, as the scene sets the solve.
-fn implicit<Op>(operator: Op, v: &Viscosity) -> ImplicitModel<Op> {
-    ImplicitModel {
-        operator,
-        tolerance: v.implicit.tolerance,
-        max_iterations: v.implicit.max_iterations,
-        // A Newtonian fluid's viscosity does not depend on the flow: nothing to read again.
-        picard_iterations: if v.is_newtonian() { 0 } else { v.implicit.picard_iterations },
-    }
-}
-
-/// [`with_model`] in `precision`: the float type and the physics variant, both picked once.
-pub fn with_precision_and_model<W: WithModel>(precision: Precision, scene: &Scene, work: W) -> W::Output {
-    match precision {
-        Precision::F32 => with_model::<f32, _>(scene, work),
-        Precision::F64 => with_model::<f64, _>(scene, work),
     }
 }
 

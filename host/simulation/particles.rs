@@ -4,12 +4,8 @@ use std::ops::{Deref, DerefMut};
 
 use crate::scene::Pressure;
 use crate::scene::{DensityEquation, Scene};
-use crate::simulation::backend::{ImplicitViews, PressureViews};
 use crate::simulation::particle_array::ParticleArray;
-use coil_kernels::cell_grid::Neighborhood;
-use coil_kernels::dfsph_bender2017::{pressure_field, ERROR_RANGE};
-use coil_kernels::fluid::Fluid;
-use coil_kernels::topology::Periodic;
+use coil_kernels::dfsph_bender2017::ERROR_RANGE;
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
 use coil_kernels::viscosity::implicit_weiler2018::DOT_RANGE;
 use coil_kernels::Real;
@@ -362,33 +358,32 @@ pub fn mat3_view_mut<R: Copy>(m: &mut [[ParticleArray<R>; 3]; 3], n: usize) -> M
     Mat3ViewMut { rows: [vec3_view_mut(x, n), vec3_view_mut(y, n), vec3_view_mut(z, n)] }
 }
 
-/// Particles in host memory with their neighbor grid: the CPU backend's state, and a device
-/// backend's copy of its particles for output.
-pub struct HostParticles<R> {
-    pub particles: Particles<R>,
-    pub grid: crate::cpu::neighbor_grid::NeighborGrid,
+/// The implicit viscosity solve's arrays as views (`coil_kernels::viscosity::implicit_weiler2018`).
+#[derive(Clone, Copy)]
+pub struct ImplicitViews<'a, R> {
+    /// The last step's v - v*, carried from step to step (m/s).
+    pub viscous_change: Vec3ViewMut<'a, R>,
+    pub predicted: Vec3ViewMut<'a, R>,
+    pub solution: Vec3ViewMut<'a, R>,
+    pub residual: Vec3ViewMut<'a, R>,
+    pub preconditioned: Vec3ViewMut<'a, R>,
+    pub direction: Vec3ViewMut<'a, R>,
+    pub product: Vec3ViewMut<'a, R>,
+    pub block: SymTensorViewMut<'a, R>,
+    /// One entry per range of `DOT_RANGE` particles.
+    pub partial_dots: ViewMut<'a, [f64; 2]>,
 }
 
-impl<R: Real> HostParticles<R> {
-    /// The neighbor grid of the particles' current order (valid after a step), with the
-    /// domain's periods (none for an open domain). For output and checks; a step's own passes
-    /// take the open or periodic loop by type.
-    pub fn neighborhood(&self) -> Neighborhood<'_, Periodic> {
-        self.grid.neighborhood(self.particles.position_view(), self.grid.periodic)
-    }
-
-    /// Particle `i`'s pressure (Pa): Eq. (6) of its density, or, where pressure is solved,
-    /// the field the solved pressures interpolate to there
-    /// (`coil_kernels::dfsph_bender2017::pressure_field`), read over `neighborhood`.
-    pub fn pressure(&self, i: usize, fluid: &Fluid<R>, neighborhood: &Neighborhood<'_, Periodic>) -> R {
-        let p = &self.particles;
-        match &p.pressure_solve {
-            Some(solve) => {
-                let n = p.len();
-                let sums = [View::new(&solve.stiffness_sums[0][..n]), View::new(&solve.stiffness_sums[1][..n])];
-                pressure_field(i, neighborhood, fluid, View::new(&p.id[..n]), View::new(&p.density[..n]), sums)
-            }
-            None => coil_kernels::density::pressure(p.density[i], fluid),
-        }
-    }
+/// The divergence-free pressure solves' arrays as views (`coil_kernels::dfsph_bender2017`).
+#[derive(Clone, Copy)]
+pub struct PressureViews<'a, R> {
+    pub factor: ViewMut<'a, R>,
+    pub stiffness: ViewMut<'a, R>,
+    pub error: ViewMut<'a, R>,
+    /// The divergence solve's stiffness sums, carried from step to step.
+    pub divergence_sum: ViewMut<'a, R>,
+    /// The density solve's stiffness sums, carried from step to step: p / rho^2.
+    pub density_sum: ViewMut<'a, R>,
+    /// One entry per range of `ERROR_RANGE` particles.
+    pub partial_sums: ViewMut<'a, [f64; 2]>,
 }

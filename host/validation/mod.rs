@@ -1,4 +1,5 @@
-//! Validation against references nobody on the team produced: `coil validate` and its tests.
+//! Validation against independent references (analytic solutions, published experiments and
+//! other codes): `coil validate` and its tests.
 
 pub mod divergence_free;
 pub mod huppert;

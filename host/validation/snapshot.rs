@@ -1,10 +1,11 @@
 //! Runs a validation scene on the CPU and samples its fluid at given times, in f64 whatever the
 //! run's precision, so each case compares plain numbers with its reference.
 
+use crate::cpu::simulation::CpuSimulation;
 use crate::scene::setup::{initial_particles, InitialParticles};
 use crate::scene::Scene;
-use crate::simulation::model::{with_precision_and_model, Model, WithModel};
-use crate::simulation::Simulation;
+use crate::simulation::model::Model;
+use crate::simulation::variant::{with_precision_and_model, WithModel};
 use coil_kernels::{Real, Vec3};
 
 /// The fluid particles of a run at one time.
@@ -61,7 +62,7 @@ struct Sample<'a> {
 impl WithModel for Sample<'_> {
     type Output = Result<Vec<Snapshot>, String>;
     fn with<R: Real, M: Model<R>>(self, model: M) -> Self::Output {
-        let mut sim = Simulation::<R, M>::new(self.scene, self.initial, model);
+        let mut sim = CpuSimulation::<R, M>::new(self.scene, self.initial, model);
         let mut out = Vec::with_capacity(self.times.len());
         for &t in self.times {
             while sim.run.time < t * (1.0 - 1e-12) {
@@ -78,7 +79,7 @@ impl WithModel for Sample<'_> {
     }
 }
 
-fn snapshot<R: Real, M: Model<R>>(sim: &Simulation<R, M>) -> Snapshot {
+fn snapshot<R: Real, M: Model<R>>(sim: &CpuSimulation<R, M>) -> Snapshot {
     let host = sim.host();
     let (p, neighborhood) = (&host.particles, host.neighborhood());
     let mut s = Snapshot { time_s: sim.run.time, ..Snapshot::default() };

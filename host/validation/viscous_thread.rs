@@ -336,7 +336,8 @@ mod tests {
         let profile = thread.profile().expect("a profile");
         let end = profile.last().expect("points")[1];
         let free_fall = (1.0f64 + 2.0 * 9.8 * 0.3).sqrt();
-        // 1.813 m/s at the floor (the estimate: about 1.8), against 2.55 in free fall.
+        // 1.813 m/s at the floor (the case was designed around about 1.8), against 2.55 in free
+        // fall.
         assert!((end - 1.813).abs() < 2e-3, "{end}");
         assert!(end < 0.75 * free_fall);
         assert!((profile[0][1] - 1.0).abs() < 1e-9, "U(0) = {}", profile[0][1]);

@@ -4,9 +4,10 @@
 //! with the continuity density, the density rate the density solve predicts.
 
 use crate::scene::DivergenceFree;
-use crate::simulation::backend::{Passes, PressureViews};
+use crate::simulation::backend::Passes;
 use crate::simulation::inlet::Inlet;
 use crate::simulation::model::SolveReport;
+use crate::simulation::particles::PressureViews;
 use coil_kernels::cell_grid::Neighbors;
 use coil_kernels::dfsph_bender2017::{
     DensityErrorArgs, DensityRateArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, Sweep, WarmStartArgs,
