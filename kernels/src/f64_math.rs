@@ -1,7 +1,7 @@
 //! `exp2` and `log2` in f64 from arithmetic alone: PTX has `ex2` and `lg2` only in f32 (and
 //! approximate), and libm would compile to slow table-driven code on the device. Each is a
 //! range reduction on the exponent bits and a short series, within a few ulp of the correctly
-//! rounded result over the whole range (tested against the host's `std` in `tests/kernels.rs`),
+//! rounded result over the whole range (tested against the host's `std` in `tests/integration/kernels.rs`),
 //! so that an f64 run's Cross exponent (K D)^n is computed in f64 on every backend.
 
 /// ln 2.

@@ -1,7 +1,7 @@
 //! Stability at the extremes: every parameter driven to the ends of its range runs cleanly or
 //! is stopped by the guard with its diagnosis, never written out as NaN frames.
 
-mod common;
+use crate::common;
 
 use coil::cpu::simulation::CpuSimulation;
 use coil::run::{run, RunError, Summary};

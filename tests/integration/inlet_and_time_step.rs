@@ -1,7 +1,7 @@
 //! Inlets deliver the mass flow rate they were given; dt follows Eq. (10) and refuses a step
 //! above it, fixed or scaled, unless the scene overrides the bound.
 
-mod common;
+use crate::common;
 
 use coil::cpu::simulation::CpuSimulation;
 use coil::scene::setup::initial_particles;

@@ -1,7 +1,7 @@
 //! Validation against published references at quick sizes; `coil validate` runs the full set
 //! and reports each error against its tolerance.
 
-mod common;
+use crate::common;
 
 use coil::scene::{
     DensityKernelKind, Pressure, PressureGradient, VelocityGradient, ViscosityOperator, ViscositySolver, WallPressure, Walls,

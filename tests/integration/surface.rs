@@ -5,7 +5,7 @@ use coil::output::surface::{reconstruct, Fluid, SurfaceMesh, SurfaceParameters};
 use coil::output::vtu_read::FrameData;
 use std::collections::{BTreeMap, HashMap};
 
-mod common;
+use crate::common;
 
 const SPACING: f64 = 0.004;
 /// The ball's radius in spacings.

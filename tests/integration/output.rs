@@ -5,7 +5,7 @@ use coil::output::vtu::{encode, Field};
 use coil::output::vtu_read::parse;
 use coil::scene::VtuEncoding;
 
-mod common;
+use crate::common;
 
 /// The arguments of `coil run scenes/dam_break.toml --quiet --out OUT`, with `--set` before
 /// each of `settings`.

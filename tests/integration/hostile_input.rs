@@ -1,7 +1,7 @@
 //! Input as a hostile but fair user gives it: every value is bounded and means something, and
 //! nothing crashes, hangs, writes a non-finite frame or writes outside the output folder.
 
-mod common;
+use crate::common;
 
 use coil::cpu::simulation::CpuSimulation;
 use coil::run::RunError;

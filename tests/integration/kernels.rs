@@ -1,6 +1,6 @@
 //! The kernels' building blocks against analytic values.
 
-mod common;
+use crate::common;
 
 use coil::scene::DensityKernelKind;
 use coil::simulation::model::SolveReport;

@@ -1,6 +1,6 @@
 //! Every shipped scene loads, validates and runs a few steps; bad input exits with code 2.
 
-mod common;
+use crate::common;
 
 use coil::cpu::simulation::CpuSimulation;
 use coil::scene::setup::initial_particles;

@@ -1,7 +1,7 @@
 //! Whole-particle-system checks: gradients, conservation, rest, neighbors, reproducibility.
 #![allow(clippy::needless_range_loop, reason = "a loop over the axes indexes several per-axis arrays at once")]
 
-mod common;
+use crate::common;
 
 use coil::cpu::simulation::CpuSimulation;
 use coil::scene::setup::initial_particles;

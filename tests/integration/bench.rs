@@ -1,7 +1,7 @@
 //! `coil bench`: Table I's sizes are the particle counts the report claims, and a small run
 //! writes its report files with the paper's figures beside the measured ones.
 
-mod common;
+use crate::common;
 
 use coil::bench::operation_count::{count_step_operations, counting, Counted};
 use coil::bench::{dam_break, PeakRates, TABLE_I};
