@@ -6,177 +6,41 @@ pub mod dfsph_bender2017;
 pub mod host_particles;
 pub mod implicit_weiler2018;
 pub mod inlet;
+pub mod instability;
 pub mod model;
 pub mod particle_array;
 pub mod particles;
 pub mod run_state;
+mod schedule;
 pub mod sorted_grid;
 pub mod time_step;
 pub mod variant;
 
 use crate::scene::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, rest_volume, InitialParticles};
-use crate::scene::{DensityKernelKind, Pressure, Scene, ViscositySolver, ViscousVelocity, Walls};
-use crate::simulation::dfsph_bender2017::PressureSolve;
+use crate::scene::{Pressure, Scene, ViscositySolver, Walls};
 use crate::simulation::host_particles::HostParticles;
 use crate::simulation::inlet::Inlet;
-use crate::simulation::model::{ImplicitStep, Model, ParticleState, SolveReport};
+use crate::simulation::model::Model;
 use crate::simulation::particles::Particles;
 use crate::simulation::sorted_grid::SortedGrid;
 use crate::simulation::time_step::{Cfl, Limit, StabilityBound, TimeStepper};
-use backend::{Backend, ParticleViews, Passes, Schedule};
-use coil_kernels::cell_grid::Neighbors;
-use coil_kernels::continuity_molteni2009::{ContinuityArgs, DensityIntegrationArgs};
+use backend::Backend;
 use coil_kernels::cross_viscosity::Rheology;
-use coil_kernels::density::{DensityArgs, DensityKernel, Poly6, Spiky};
 use coil_kernels::diagnostics::StateFigures;
 use coil_kernels::fluid::Fluid;
-use coil_kernels::leapfrog::LeapfrogArgs;
-use coil_kernels::mirrored_wall::MirroredWallArgs;
-use coil_kernels::nozzle::{NozzleArgs, NozzleShiftArgs};
-use coil_kernels::shifting_sun2017::{ShiftArgs, Shifting, ShiftingArgs, LARGEST_SHIFT_SPACINGS};
-use coil_kernels::topology::{Open, Topology};
+use coil_kernels::shifting_sun2017::{Shifting, LARGEST_SHIFT_SPACINGS};
 use coil_kernels::{Real, Vec3};
+pub use instability::{Instability, Solve, StepError, UnconvergedSolve};
 pub use run_state::RunState;
-use std::fmt;
+use schedule::{in_topology, DensityPass, ForcesAndMotion};
 
 /// The divergence of position, -sum_j V_j x_ij . grad W_ij, below which particle shifting takes
 /// a particle to be near a free surface (3 inside the fluid, where the calibrated gradient makes
 /// it exact on the lattice): DualSPHysics's threshold in 3-D.
 const SURFACE_POSITION_DIVERGENCE: f64 = 2.75;
 
-/// Why a run stopped early.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Instability {
-    pub step: u64,
-    pub time_s: f64,
-    /// Fluid particles with a non-finite velocity or density, or a speed above the runaway
-    /// limit.
-    pub bad_particles: usize,
-    pub max_speed_m_s: f64,
-    pub runaway_speed_m_s: f64,
-    pub dt_s: f64,
-    pub stability_bound_s: f64,
-    /// The velocity the viscous terms read.
-    pub viscous_velocity: ViscousVelocity,
-    /// Whether pressure was solved (divergence-free) rather than Eq. (6)'s.
-    pub pressure_solved: bool,
-    /// The first non-finite value a frame would have held (field, particle id, value), where
-    /// that is what stopped the run.
-    pub non_finite: Option<String>,
-    /// The implicit viscosity solve that missed its tolerance, where that is what stopped the
-    /// run.
-    pub unconverged_solve: Option<Box<UnconvergedSolve>>,
-}
-
-/// A solve that stopped above its tolerance.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct UnconvergedSolve {
-    pub solve: Solve,
-    pub iterations: u32,
-    /// The last residual's norm over that of v* (implicit viscosity), or the fluid's mean
-    /// error over rho0 (pressure).
-    pub relative_residual: f64,
-    pub tolerance: f64,
-}
-
-/// Which solve of a step.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Solve {
-    ImplicitViscosity,
-    /// The divergence-free pressure's divergence solve.
-    Divergence,
-    /// The divergence-free pressure's density solve.
-    Density,
-}
-
-impl fmt::Display for Instability {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if let Some(solve) = &self.unconverged_solve {
-            let (step, t, dt) = (self.step, self.time_s, self.dt_s);
-            let (iterations, error, tolerance) = (solve.iterations, solve.relative_residual, solve.tolerance);
-            return match solve.solve {
-                Solve::ImplicitViscosity => write!(
-                    f,
-                    "the implicit viscosity solve did not converge at step {step} (t = {t:.6e} s, dt = {dt:.3e} s): after {iterations} iterations its residual was {error:.3e} of its first, above the tolerance {tolerance:.1e}. Raise material.viscosity.implicit.max_iterations, lower dt (simulation.time_step.safety_factor or fixed_s), or set material.viscosity.implicit.on_no_convergence = \"warn\" to go on and count such steps."
-                ),
-                Solve::Divergence | Solve::Density => {
-                    let name = if solve.solve == Solve::Divergence { "divergence" } else { "density" };
-                    write!(
-                        f,
-                        "the {name} solve did not converge at step {step} (t = {t:.6e} s, dt = {dt:.3e} s): after {iterations} sweeps the fluid's mean {name} error was {error:.3e} of rho0, above the tolerance {tolerance:.1e}. Raise simulation.divergence_free.max_iterations, lower simulation.divergence_free.cfl_factor or max_time_step_s, or set simulation.divergence_free.on_no_convergence = \"warn\" to go on and count such steps."
-                    )
-                }
-            };
-        }
-        match &self.non_finite {
-            Some(what) => write!(
-                f,
-                "the run went unstable at step {} (t = {:.6e} s): {} particle(s) with a non-finite value, the first {what}; nothing non-finite was written. ",
-                self.step, self.time_s, self.bad_particles
-            )?,
-            None => write!(
-                f,
-                "the run went unstable at step {} (t = {:.6e} s): {} particle(s) with a non-finite velocity or density, or a speed above {:.3} m/s (largest finite speed {:.3e} m/s). ",
-                self.step, self.time_s, self.bad_particles, self.runaway_speed_m_s, self.max_speed_m_s
-            )?,
-        }
-        if self.dt_s > self.stability_bound_s {
-            write!(
-                f,
-                "Likely cause: dt = {:.3e} s is above the Eq. (10) bound {:.3e} s; lower simulation.time_step.fixed_s or safety_factor (docs/tradeoff.md gives how far above the bound each viscosity operator was measured to stay stable).",
-                self.dt_s, self.stability_bound_s
-            )
-        } else if self.pressure_solved {
-            write!(
-                f,
-                "dt = {:.3e} s was within the bound of the terms not solved; likely causes: a CFL step too long for the flow (lower simulation.divergence_free.cfl_factor or max_time_step_s), pressure left unsolved between steps (raise simulation.divergence_free.min_iterations or lower its tolerances, or its relaxation), or particles injected into walls.",
-                self.dt_s
-            )
-        } else {
-            write!(
-                f,
-                "dt = {:.3e} s was within the Eq. (10) bound {:.3e} s; likely causes: free-surface tension from Eq. (6) at a high sound speed (set material.clamp_negative_pressure = true), a sound speed too low for the flow speed (walls give way above Mach 1), or particles injected into walls; or try a smaller simulation.time_step.safety_factor.",
-                self.dt_s, self.stability_bound_s
-            )
-        }
-    }
-}
-
 /// Figures of the state after a step, over fluid particles (see `coil_kernels::diagnostics`).
 pub type Diagnostics = StateFigures;
-
-/// Why a step stopped.
-#[derive(Debug)]
-pub enum StepError<F> {
-    Unstable(Instability),
-    /// The backend failed.
-    Backend(F),
-}
-
-impl<F: fmt::Display> fmt::Display for StepError<F> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            StepError::Unstable(i) => i.fmt(f),
-            StepError::Backend(e) => e.fmt(f),
-        }
-    }
-}
-
-impl<F> From<Instability> for StepError<F> {
-    fn from(i: Instability) -> Self {
-        StepError::Unstable(i)
-    }
-}
-
-impl StepError<std::convert::Infallible> {
-    /// The instability, on a backend that cannot fail otherwise.
-    pub fn instability(self) -> Instability {
-        match self {
-            StepError::Unstable(i) => i,
-            StepError::Backend(never) => match never {},
-        }
-    }
-}
 
 /// A run on backend `B`: the run state, which every backend shares, and the particles, which
 /// `B` holds.
@@ -384,201 +248,5 @@ impl<R: Real, M: Model<R>, B: Backend<R>> Simulation<R, M, B> {
     /// resumes as if it had never stopped.
     pub fn settled(&self) -> bool {
         self.backend.diagnostics_due(self.run.steps)
-    }
-}
-
-/// Runs `schedule` on `backend` in the domain's topology: the periodic neighbor loops only where
-/// an axis wraps.
-fn in_topology<R: Real, B: Backend<R>, S: Schedule<R>>(backend: &mut B, schedule: S) -> Result<(), B::Fault> {
-    match backend.periodic() {
-        Some(periodic) => backend.run(periodic, schedule),
-        None => backend.run(Open, schedule),
-    }
-}
-
-/// Algorithm 1, lines 5-8: density (pressure is evaluated from it where it is read), or, with
-/// the continuity equation, the fluid's density rate and the walls' density; where pressure is
-/// solved on the continuity density, the walls' density and the fluid's raised to its sum (the
-/// density solve predicts the rate).
-struct DensityPass<'r, R: Real, M: Model<R>> {
-    run: &'r RunState<R, M>,
-}
-
-impl<R: Real, M: Model<R>> Schedule<R> for DensityPass<'_, R, M> {
-    fn run<T: Topology, N: Neighbors, P: Passes<R, T, N>>(self, v: ParticleViews<'_, R, T, N>, passes: &mut P) {
-        density(self.run, &v, passes);
-    }
-}
-
-fn density<R: Real, M: Model<R>, T: Topology, N: Neighbors, P: Passes<R, T, N>>(
-    run: &RunState<R, M>,
-    v: &ParticleViews<'_, R, T, N>,
-    passes: &mut P,
-) {
-    match run.density_kernel {
-        DensityKernelKind::Poly6 => density_with::<R, M, Poly6, T, N, P>(run, v, passes),
-        DensityKernelKind::Spiky => density_with::<R, M, Spiky, T, N, P>(run, v, passes),
-    }
-}
-
-fn density_with<R: Real, M: Model<R>, K: DensityKernel, T: Topology, N: Neighbors, P: Passes<R, T, N>>(
-    run: &RunState<R, M>,
-    v: &ParticleViews<'_, R, T, N>,
-    passes: &mut P,
-) {
-    let density_args = DensityArgs { neighborhood: v.neighbors, fluid: run.fluid, id: v.id, density: v.density };
-    match v.density_rate {
-        Some(_) if run.pressure_solve.is_some() => passes.continuity_floor(density_args),
-        Some(density_rate) => passes.continuity::<K>(ContinuityArgs {
-            neighborhood: v.neighbors,
-            fluid: run.fluid,
-            diffusivity: run.density_diffusivity,
-            id: v.id,
-            velocity: v.velocity.read(),
-            density: v.density,
-            density_rate,
-        }),
-        None => passes.density::<K>(density_args),
-    }
-}
-
-/// Algorithm 1, lines 5-19: density, mirrored walls (when the scene asks), velocity gradient
-/// and stress, accelerations, nozzles and leap-frog.
-struct ForcesAndMotion<'r, R: Real, M: Model<R>> {
-    run: &'r RunState<R, M>,
-    /// This step (s).
-    dt: f64,
-    /// Leap-frog's kick (s).
-    kick_dt: f64,
-    /// How the implicit viscosity solve went, where there is one.
-    solve: &'r mut Option<SolveReport>,
-    /// How the divergence and density solves went, where pressure is solved.
-    pressure_solves: &'r mut Option<[SolveReport; 2]>,
-}
-
-impl<R: Real, M: Model<R>> Schedule<R> for ForcesAndMotion<'_, R, M> {
-    fn run<T: Topology, N: Neighbors, P: Passes<R, T, N>>(self, v: ParticleViews<'_, R, T, N>, passes: &mut P) {
-        let run = self.run;
-        let fluid = run.fluid;
-        // Lines 5-8.
-        density(run, &v, passes);
-        let pressure_solve = run.pressure_solve.zip(v.pressure_solve).map(|(settings, arrays)| PressureSolve {
-            settings,
-            neighborhood: v.neighbors,
-            fluid,
-            dt: R::from_f64(self.dt),
-            kick_dt: R::from_f64(self.kick_dt),
-            id: v.id,
-            position: v.position.read(),
-            density: v.density.read(),
-            velocity_half: v.velocity_half,
-            acceleration: v.acceleration,
-            continuity: v.density_rate.is_some(),
-            arrays,
-            inlets: run.inlets(),
-            time: run.time,
-        });
-        let divergence = pressure_solve.as_ref().map(|solve| {
-            solve.factors(passes);
-            solve.divergence(passes)
-        });
-        let viscous_velocity = match run.viscous_velocity {
-            ViscousVelocity::FullStep => v.velocity,
-            ViscousVelocity::HalfStep => v.velocity_half,
-        };
-        if let Some(mirror) = v.wall_mirror {
-            passes.mirrored_wall(MirroredWallArgs {
-                neighborhood: v.grid,
-                fluid,
-                id: v.id,
-                mirror,
-                velocity: viscous_velocity,
-                density: v.density,
-            });
-        }
-        // Lines 9-16: velocity gradient and stress, accelerations.
-        *self.solve = run.model.accelerations(
-            passes,
-            ParticleState {
-                neighborhood: v.neighbors,
-                fluid,
-                id: v.id,
-                velocity: viscous_velocity.read(),
-                density: v.density.read(),
-                stress: v.stress,
-                viscosity: v.viscosity,
-                velocity_gradient: v.velocity_gradient,
-                acceleration: v.acceleration,
-                implicit: v.implicit.map(|arrays| ImplicitStep {
-                    kick_dt: R::from_f64(self.kick_dt),
-                    velocity_half: v.velocity_half.read(),
-                    velocity: viscous_velocity.read(),
-                    arrays,
-                    position: v.position.read(),
-                    inlets: run.inlets(),
-                    time: run.time,
-                }),
-            },
-        );
-        // Fluid inside a nozzle's tube moves with the jet (paper Sec. III-C; see `nozzle`).
-        for tube in run.inlet_tubes() {
-            passes.nozzle(NozzleArgs {
-                fluid,
-                tube,
-                id: v.id,
-                position: v.position.read(),
-                acceleration: v.acceleration,
-                velocity_half: v.velocity_half,
-            });
-        }
-        // Pressure last: the density the step ends at counts gravity and viscosity.
-        if let (Some(solve), Some(divergence)) = (&pressure_solve, divergence) {
-            *self.pressure_solves = Some([divergence, solve.density(passes)]);
-        }
-        // The continuity equation's density after the accelerations have read this step's;
-        // where pressure is solved, the density the solve predicted.
-        if let Some(density_rate) = v.density_rate {
-            if let Some(solve) = &pressure_solve {
-                solve.density_rate(passes, density_rate);
-            }
-            passes.density_integration(DensityIntegrationArgs {
-                fluid,
-                dt: R::from_f64(self.dt),
-                id: v.id,
-                density_rate: density_rate.read(),
-                density: v.density,
-            });
-        }
-        // Shifts over this step's positions, which leap-frog is about to move.
-        let shift = v.shift.zip(run.shifting);
-        if let Some((shift, shifting)) = shift {
-            passes.shifting(ShiftingArgs {
-                neighborhood: v.neighbors,
-                fluid,
-                shifting,
-                dt: R::from_f64(self.dt),
-                id: v.id,
-                velocity: v.velocity.read(),
-                shift,
-            });
-            for tube in run.inlet_tubes() {
-                passes.nozzle_shift(NozzleShiftArgs { fluid, tube, id: v.id, position: v.position.read(), shift });
-            }
-        }
-        // Lines 17-19: leap-frog.
-        passes.leapfrog(LeapfrogArgs {
-            fluid,
-            dt: R::from_f64(self.dt),
-            kick_dt: R::from_f64(self.kick_dt),
-            id: v.id,
-            acceleration: v.acceleration.read(),
-            position: v.position,
-            velocity_half: v.velocity_half,
-            velocity: v.velocity,
-            topology: v.topology,
-        });
-        if let Some((shift, _)) = shift {
-            passes.shift(ShiftArgs { topology: v.topology, shift: shift.read(), position: v.position });
-        }
     }
 }
