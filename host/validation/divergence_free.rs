@@ -5,10 +5,12 @@
 //! same operator, kernel and walls at Eq. (10)'s bound, with the tolerances of the implicit
 //! viscosity's cases: on the paper's walls, which slip, and on mirrored ones, which do not.
 
+use super::case::CaseResult;
+use super::huppert::huppert_against_explicit;
 use super::huppert::Release;
+use super::poiseuille::{cross_against_explicit, startup_against_explicit};
 use super::poiseuille::{Channel, CrossLaw};
 use super::taylor_green::{self, Vortex};
-use super::{cross_against_explicit, huppert_against_explicit, startup_against_explicit, CaseResult};
 use crate::scene::{DensityKernelKind, Pressure, VelocityGradient, ViscosityOperator, ViscositySolver, Walls};
 use std::time::Instant;
 

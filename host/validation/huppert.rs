@@ -2,9 +2,17 @@
 //! upright cylinder of Newtonian fluid released on a no-slip plane spreads, once thin, as the
 //! similarity solution r_N(t) = 0.894 (g V^3 t / (3 nu))^(1/8).
 
-use super::scene_word;
+use super::case::scene_word;
+use super::case::{operator_file_word, operator_label, save_plot, CaseResult};
 use super::snapshot::{snapshots_from, Snapshot};
+use crate::output::plot::Axis;
+use crate::output::plot::Chart;
+use crate::output::plot::Curve;
+use crate::output::plot::Line;
+use crate::output::plot::PALETTE;
 use crate::scene::{DensityKernelKind, Pressure, Scene, ViscosityOperator, ViscositySolver, Walls};
+use std::path::Path;
+use std::time::Instant;
 
 /// |g| (m/s^2).
 const GRAVITY: f64 = 9.81;
@@ -201,4 +209,118 @@ pub fn simulate(release: &Release) -> Result<Spreading, String> {
     ratios.sort_by(f64::total_cmp);
     let prefactor = ratios[ratios.len() / 2];
     Ok(Spreading { radii, volume_m3, exponent, prefactor, fitted: late.len() })
+}
+
+/// Huppert's viscous spreading of a cylinder released at `across` particles over its radius,
+/// with operator `op` (and its hourglass control of weight `hourglass_control`): the fitted
+/// exponent and prefactor of r(t) against 1/8 and 0.894, over the samples past 1.5 R0.
+pub fn huppert_spreading(
+    across: usize,
+    op: ViscosityOperator,
+    hourglass_control: f64,
+    out: Option<&Path>,
+) -> Result<Vec<CaseResult>, String> {
+    let release = Release { hourglass_control, ..Release::new(across, op) };
+    let case = format!("Huppert spreading, {}, {across} across R0", operator_label(op, hourglass_control));
+    let started = Instant::now();
+    let r = simulate(&release).map_err(|e| format!("{case}: {e}"))?;
+    let wall_s = started.elapsed().as_secs_f64();
+    let plot = out
+        .map(|dir| {
+            let reference =
+                r.radii.iter().map(|p| [p[0], release.huppert_radius(r.volume_m3, p[0]) / release.radius_m]).collect();
+            let simulated = r.radii.iter().map(|p| [p[0], p[1] / release.radius_m]).collect();
+            let chart = Chart {
+                title: case.clone(),
+                x: Axis::log("t (s)"),
+                y: Axis::log("r_N / R0"),
+                series: vec![
+                    Curve {
+                        label: "0.894 (g V^3 t / 3 nu)^(1/8)".into(),
+                        color: PALETTE[0],
+                        points: reference,
+                        line: Line::Solid,
+                        marker: 0.0,
+                    },
+                    Curve { label: "sph".into(), color: PALETTE[1], points: simulated, line: Line::None, marker: 3.0 },
+                ],
+            };
+            save_plot(&chart, &dir.join(format!("huppert_{}_{across}.png", operator_file_word(op, hourglass_control))))
+        })
+        .transpose()?;
+    let onset = 1.5 * release.radius_m;
+    let conditions = format!(
+        "{} samples from r = 1.5 R0 to {} R0 (R0 = H0 = {} m, nu = {} m^2/s, Re = {:.3} at 1.5 R0); c = {} m/s",
+        r.fitted,
+        release.final_spread,
+        release.radius_m,
+        release.nu_m2_s,
+        release.reynolds_at(r.volume_m3, onset),
+        release.sound_speed_m_s
+    );
+    Ok(vec![
+        CaseResult {
+            case: format!("{case}: exponent"),
+            measure: format!(
+                "|slope of ln r against ln t / (1/8) - 1| (measured {:.4}); r = sqrt(7/3 <x^2 + z^2>); {conditions}",
+                r.exponent
+            ),
+            error: (r.exponent / 0.125 - 1.0).abs(),
+            tolerance: 0.1,
+            at_least: false,
+            wall_s,
+            plot,
+        },
+        CaseResult {
+            case: format!("{case}: prefactor"),
+            measure: format!("|median r / (g V^3 t / 3 nu)^(1/8) / 0.894 - 1| (measured {:.4}); {conditions}", r.prefactor),
+            error: (r.prefactor / HUPPERT_PREFACTOR - 1.0).abs(),
+            tolerance: 0.1,
+            at_least: false,
+            wall_s,
+            plot: None,
+        },
+    ])
+}
+/// Huppert's spreading with implicit viscosity against the explicit solver on the same operator
+/// (the paper's with the own-density gradient): the fitted exponents within 0.01 of each other.
+pub fn huppert_implicit(across: usize) -> Result<CaseResult, String> {
+    use crate::scene::ViscositySolver;
+    let explicit = Release { own_density: Some(ViscositySolver::Explicit), ..Release::new(across, ViscosityOperator::Stress) };
+    let implicit = Release { own_density: Some(ViscositySolver::Implicit), ..explicit };
+    let case = format!("Huppert spreading, paper's operator (own density), implicit, {across} across R0: as the explicit");
+    huppert_against_explicit(&explicit, &implicit, case, "implicit", "")
+}
+/// Huppert's spreading in `other` against `explicit`, described by `reference`: the fitted
+/// exponents' errors within 0.01 of each other. `name` names `other`.
+pub(super) fn huppert_against_explicit(
+    explicit: &Release,
+    other: &Release,
+    case: String,
+    name: &str,
+    reference: &str,
+) -> Result<CaseResult, String> {
+    let started = Instant::now();
+    let e = simulate(explicit)?;
+    let explicit_s = started.elapsed().as_secs_f64();
+    let started = Instant::now();
+    let o = simulate(other)?;
+    let other_s = started.elapsed().as_secs_f64();
+    let error = |r: &Spreading| (r.exponent / 0.125 - 1.0).abs();
+    let prefactor = |r: &Spreading| (r.prefactor / HUPPERT_PREFACTOR - 1.0).abs();
+    Ok(CaseResult {
+        case,
+        measure: format!(
+            "|exponent error {name} - explicit|{reference}: {:.4} against {:.4}; prefactor errors {:.4} against {:.4}; {other_s:.0} s against {explicit_s:.0} s",
+            error(&o),
+            error(&e),
+            prefactor(&o),
+            prefactor(&e)
+        ),
+        error: (error(&o) - error(&e)).abs(),
+        tolerance: 0.01,
+        at_least: false,
+        wall_s: other_s + explicit_s,
+        plot: None,
+    })
 }

@@ -7,10 +7,18 @@
 //! ten periods of the tank's slowest acoustic mode instead, so the fluid compresses almost
 //! quasi-statically, then holds it for five more periods before comparing.
 
-use super::scene_word;
+use super::case::scene_word;
+use super::case::{save_plot, CaseResult};
 use super::snapshot::{snapshots, Snapshot};
+use crate::output::plot::Axis;
+use crate::output::plot::Chart;
+use crate::output::plot::Curve;
+use crate::output::plot::Line;
+use crate::output::plot::PALETTE;
 use crate::scene::{DensityKernelKind, Pressure, PressureGradient, Scene, Walls};
 use std::f64::consts::PI;
+use std::path::Path;
+use std::time::Instant;
 
 /// An open-topped cubic tank `layers` particles wide and deep, filled to the brim.
 #[derive(Debug, Clone, Copy)]
@@ -196,4 +204,74 @@ pub fn simulate(tank: &Tank) -> Result<TankResult, String> {
     let pressure_scatter = (squares / snapshot.pressure.len() as f64).sqrt() / (rho0_g * tank.depth_m);
     let residual_speed = snapshot.max_speed() / (GRAVITY * tank.depth_m).sqrt();
     Ok(TankResult { pressure_error, pressure_scatter, pressure_ratio, residual_speed, surface_m: surface, snapshot })
+}
+
+/// The hydrostatic tank, `layers` particles deep, with the full pressure gradient: the pressure
+/// against rho0 g depth, and the residual speed once settled.
+pub fn hydrostatic_tank(layers: usize, pressure: Pressure, out: Option<&Path>) -> Result<Vec<CaseResult>, String> {
+    let weakly_compressible = Tank::new(layers, PressureGradient::Full);
+    let (tank, solved, file) = match pressure {
+        Pressure::WeaklyCompressible => (weakly_compressible, "", ""),
+        Pressure::DivergenceFree => {
+            (weakly_compressible.divergence_free(), ", divergence-free pressure mirrored onto the walls", "_divergence_free")
+        }
+    };
+    let started = Instant::now();
+    let r = simulate(&tank)?;
+    let wall_s = started.elapsed().as_secs_f64();
+    let case = format!("hydrostatic tank, {layers} layers deep{solved}");
+    let plot = out
+        .map(|dir| {
+            let d = tank.depth_m;
+            let surface = r.surface_m;
+            let rho0_g = tank.rho0_g();
+            let points =
+                r.snapshot.position.iter().zip(&r.snapshot.pressure).map(|(x, p)| [(surface - x[1]) / d, p / (rho0_g * d)]);
+            let chart = Chart {
+                title: case.clone(),
+                x: Axis::linear("depth / D"),
+                y: Axis::linear("p / (rho0 g D)"),
+                series: vec![
+                    Curve {
+                        label: "rho0 g depth".into(),
+                        color: PALETTE[0],
+                        points: vec![[0.0, 0.0], [1.0, 1.0]],
+                        line: Line::Solid,
+                        marker: 0.0,
+                    },
+                    Curve { label: "sph".into(), color: PALETTE[1], points: points.collect(), line: Line::None, marker: 2.0 },
+                ],
+            };
+            save_plot(&chart, &dir.join(format!("hydrostatic_{layers}{file}.png")))
+        })
+        .transpose()?;
+    // Solved, the fluid does not compress and the tolerance is the 2 % a solved pressure is
+    // asked to read within.
+    let (c, tolerance) = match pressure {
+        Pressure::WeaklyCompressible => (format!("c = {:.2} m/s (g D / c^2 = 0.01)", tank.sound_speed()), 0.05),
+        Pressure::DivergenceFree => ("the pressure read as the solved pressures' SPH interpolant".to_string(), 0.02),
+    };
+    Ok(vec![
+        CaseResult {
+            case: format!("{case}: pressure"),
+            measure: format!(
+                "max over layers deeper than h of |mean p - rho0 g depth| / (rho0 g D) after gravity is ramped up (particle scatter about the layer mean: {:.3} rms); {c}",
+                r.pressure_scatter
+            ),
+            error: r.pressure_error,
+            tolerance,
+            at_least: false,
+            wall_s,
+            plot,
+        },
+        CaseResult {
+            case: format!("{case}: at rest"),
+            measure: format!("max |v| / sqrt(g D) at the end; {c}"),
+            error: r.residual_speed,
+            tolerance: 0.01,
+            at_least: false,
+            wall_s,
+            plot: None,
+        },
+    ])
 }

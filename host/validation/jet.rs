@@ -3,9 +3,17 @@
 //! enough the rope buckles and its axis just above the plate ([`JetAxis`]) swings sideways; from
 //! a few diameters it stays straight.
 
+use super::case::{operator_file_word, operator_label, save_plot, CaseResult};
 use super::snapshot::snapshots;
+use crate::output::plot::Axis;
+use crate::output::plot::Chart;
+use crate::output::plot::Curve;
+use crate::output::plot::Line;
+use crate::output::plot::PALETTE;
 use crate::scene::{Scene, VelocityGradient, ViscosityOperator, ViscositySolver};
 use crate::validation::jet_axis::JetAxis;
+use std::path::Path;
+use std::time::Instant;
 
 /// The shipped Newtonian jet.
 const NEWTONIAN_JET: &str = include_str!("../../scenes/newtonian_jet.toml");
@@ -71,4 +79,93 @@ fn offsets_of(axis: &JetAxis, scene: &Scene, end_time_s: f64) -> Result<Vec<[f64
             axis.offset(particles).map(|o| [s.time_s, o / axis.diameter_m])
         })
         .collect())
+}
+
+/// Jet buckling at Re = 0.2 (the shipped Newtonian jet) with operator `op` (and its hourglass
+/// control of weight `hourglass_control`), from `height_over_d` diameters: with `buckles`, the
+/// axis just above the plate must swing sideways by more than D/2; otherwise it must stay
+/// within 0.1 D.
+pub fn jet_buckling(
+    height_over_d: f64,
+    op: ViscosityOperator,
+    hourglass_control: f64,
+    buckles: bool,
+    end_time_s: f64,
+    out: Option<&Path>,
+) -> Result<CaseResult, String> {
+    let expect = if buckles { "buckles" } else { "stays straight" };
+    let tolerance = if buckles { 0.5 } else { 0.1 };
+    let case = format!("jet, H/D = {height_over_d}, Re = 0.2, {}: {expect}", operator_label(op, hourglass_control));
+    let started = Instant::now();
+    let offsets = axis_offsets(height_over_d, op, hourglass_control, end_time_s).map_err(|e| format!("{case}: {e}"))?;
+    let offset = offsets.iter().map(|p| p[1]).fold(0.0, f64::max);
+    let plot = out
+        .map(|dir| {
+            let chart = Chart {
+                title: case.clone(),
+                x: Axis::linear("t (s)"),
+                y: Axis::linear("axis offset / D"),
+                series: vec![
+                    Curve {
+                        label: format!("threshold {tolerance} D"),
+                        color: PALETTE[0],
+                        points: vec![[0.0, tolerance], [end_time_s, tolerance]],
+                        line: Line::Solid,
+                        marker: 0.0,
+                    },
+                    Curve { label: "sph".into(), color: PALETTE[1], points: offsets, line: Line::Solid, marker: 3.0 },
+                ],
+            };
+            let word = operator_file_word(op, hourglass_control);
+            save_plot(&chart, &dir.join(format!("jet_{word}_h{height_over_d}.png")))
+        })
+        .transpose()?;
+    Ok(CaseResult {
+        case,
+        measure: format!(
+            "largest sideways offset / D of the axis (the centroid of the downward flux between D/2 and 3D/2 above the plate), every 0.02 s to {end_time_s} s (the plot shows it against t); c = 20 m/s"
+        ),
+        error: offset,
+        tolerance,
+        at_least: buckles,
+        wall_s: started.elapsed().as_secs_f64(),
+        plot,
+    })
+}
+/// The jet of Fig. 5 with implicit viscosity (the paper's operator with the own-density
+/// gradient): from H/D = 12 it must still buckle (largest offset above D/2); from H/D = 3 its
+/// largest offset must be within 0.03 D of the explicit solver's on the same operator.
+pub fn jet_implicit(height_over_d: f64, end_time_s: f64) -> Result<CaseResult, String> {
+    use crate::scene::ViscositySolver;
+    let buckles = height_over_d >= 10.0;
+    let largest = |o: &[[f64; 2]]| o.iter().map(|p| p[1]).fold(0.0, f64::max);
+    let started = Instant::now();
+    let implicit = largest(&own_density_axis_offsets(height_over_d, ViscositySolver::Implicit, end_time_s)?);
+    let implicit_s = started.elapsed().as_secs_f64();
+    let base = format!("jet, H/D = {height_over_d}, Re = 0.2, paper's operator (own density), implicit viscosity");
+    if buckles {
+        return Ok(CaseResult {
+            case: format!("{base}: buckles"),
+            measure: format!("largest sideways offset / D of the axis, every 0.02 s to {end_time_s} s ({implicit_s:.0} s)"),
+            error: implicit,
+            tolerance: 0.5,
+            at_least: true,
+            wall_s: implicit_s,
+            plot: None,
+        });
+    }
+    let started = Instant::now();
+    let explicit = largest(&own_density_axis_offsets(height_over_d, ViscositySolver::Explicit, end_time_s)?);
+    let explicit_s = started.elapsed().as_secs_f64();
+    Ok(CaseResult {
+        case: format!("{base}: as the explicit solver"),
+        measure: format!(
+            "|largest offset implicit - explicit| / D, every 0.02 s to {end_time_s} s: {implicit:.3} against {explicit:.3} ({implicit_s:.0} s against {explicit_s:.0} s)"
+        ),
+        error: (implicit - explicit).abs(),
+        tolerance: 0.03,
+        at_least: false,
+        wall_s: implicit_s + explicit_s,
+        plot: None,
+    })
 }

@@ -3,13 +3,16 @@
 //! series solution, and the steady flow of a Cross fluid against the profile integrated from
 //! its exact shear stress.
 
-use super::scene_word;
+use super::case::scene_word;
+use super::case::{across_gap, operator_file_word, operator_label, profile_chart, save_plot, CaseResult, MORRIS_TIMES};
 use super::snapshot::snapshots;
 use crate::scene::{
     DensityKernelKind, Precision, Pressure, Scene, VelocityGradient, ViscosityOperator, ViscositySolver, ViscousVelocity,
     WallPressure, Walls,
 };
 use std::f64::consts::PI;
+use std::path::Path;
+use std::time::Instant;
 
 /// Morris et al. 1997's channel: L = 1 mm, nu = 1e-6 m^2/s, F = 2e-4 m/s^2, rho0 = 1000
 /// kg/m^3, so u_max = F L^2 / (8 nu) = 2.5e-5 m/s and the flow settles over L^2 / nu = 1 s.
@@ -245,4 +248,200 @@ pub fn simulate(channel: &Channel, times: &[f64]) -> Result<Profiles, String> {
 /// Largest |u - reference(y)| over the particles of `profile`, over `scale` (m/s).
 pub fn relative_max_error(profile: &[[f64; 2]], reference: impl Fn(f64) -> f64, scale: f64) -> f64 {
     profile.iter().map(|&[y, u]| (u - reference(y)).abs()).fold(0.0, f64::max) / scale
+}
+
+/// The start-up Poiseuille flow against Morris et al.'s series, at `across` particles over the
+/// gap: L-infinity error over all sampled times, relative to the steady peak.
+pub fn startup_poiseuille(across: usize, op: ViscosityOperator, out: Option<&Path>) -> Result<CaseResult, String> {
+    startup_poiseuille_in(&Channel::morris(across, op), out)
+}
+/// [`startup_poiseuille`] in a given channel (its resolution, operator, walls, precision, c and
+/// dt safety factor), for the trade-off sweeps.
+pub fn startup_poiseuille_in(channel: &Channel, out: Option<&Path>) -> Result<CaseResult, String> {
+    let (channel, across, op) = (*channel, channel.across, channel.operator);
+    let started = Instant::now();
+    let times = MORRIS_TIMES.map(|t| t * channel.gap_m * channel.gap_m / channel.nu0_m2_s);
+    let profiles = simulate(&channel, &times)?;
+    let peak = channel.newtonian_peak();
+    let mut error: f64 = 0.0;
+    let mut samples = Vec::new();
+    for (&t, profile) in times.iter().zip(&profiles) {
+        error = error.max(relative_max_error(profile, |y| startup_velocity(&channel, y, t), peak));
+        let reference = across_gap(channel.gap_m, 100).into_iter().map(|y| [y, startup_velocity(&channel, y, t)]).collect();
+        samples.push((format!("t={t:.4}s"), profile.clone(), reference));
+    }
+    let hg = channel.hourglass_control;
+    let case = format!("start-up Poiseuille, {}, {across} across", operator_label(op, hg));
+    let plot = out
+        .map(|dir| {
+            let name = format!("poiseuille_{}_{across}.png", operator_file_word(op, hg));
+            save_plot(&profile_chart(case.clone(), channel.gap_m, peak, &samples), &dir.join(name))
+        })
+        .transpose()?;
+    Ok(CaseResult {
+        case,
+        measure: format!(
+            "max |u - u_ref| / u_max at nu t / L^2 = {MORRIS_TIMES:?}; c = {} m/s (Mach {:.3})",
+            channel.sound_speed_m_s,
+            channel.newtonian_peak() / channel.sound_speed_m_s
+        ),
+        error,
+        tolerance: 0.03,
+        at_least: false,
+        wall_s: started.elapsed().as_secs_f64(),
+        plot,
+    })
+}
+/// The steady Poiseuille flow of a Cross fluid (K in s, n) with operator `op`, against the
+/// profile integrated from its exact shear stress: L-infinity error over the centre velocity.
+pub fn cross_poiseuille(
+    across: usize,
+    op: ViscosityOperator,
+    k_s: f64,
+    n: f64,
+    out: Option<&Path>,
+) -> Result<CaseResult, String> {
+    let law = CrossLaw { nu_inf_m2_s: 0.25e-6, k_s, n };
+    cross_poiseuille_in(&Channel { cross: Some(law), ..Channel::morris(across, op) }, out)
+}
+/// [`cross_poiseuille`] in a given channel, whose `cross` must be set.
+pub fn cross_poiseuille_in(channel: &Channel, out: Option<&Path>) -> Result<CaseResult, String> {
+    let law = channel.cross.expect("a Cross channel");
+    let (channel, across, k_s, n, op) = (*channel, channel.across, law.k_s, law.n, channel.operator);
+    let started = Instant::now();
+    // The slowest mode decays at the rate of nu_inf: 0.75 L^2 / nu_inf leaves e^-30 of it.
+    let end = 0.75 * channel.gap_m * channel.gap_m / law.nu_inf_m2_s;
+    let profile = simulate(&channel, &[end])?.remove(0);
+    let ys: Vec<f64> = profile.iter().map(|p| p[0]).collect();
+    let reference = cross_steady_velocity(&channel, &law, &ys);
+    let centre = cross_steady_velocity(&channel, &law, &[0.5 * channel.gap_m])[0];
+    let error = profile.iter().zip(&reference).map(|(p, r)| (p[1] - r).abs()).fold(0.0, f64::max) / centre;
+    let hg = channel.hourglass_control;
+    let case = format!("steady Cross Poiseuille K = {k_s} s, n = {n}, {}, {across} across", operator_label(op, hg));
+    let plot = out
+        .map(|dir| {
+            let path = dir.join(format!("cross_poiseuille_{}_k{k_s}_n{n}_{across}.png", operator_file_word(op, hg)));
+            let curve_y = across_gap(channel.gap_m, 100);
+            let curve = curve_y.iter().zip(cross_steady_velocity(&channel, &law, &curve_y)).map(|(&y, u)| [y, u]).collect();
+            save_plot(&profile_chart(case.clone(), channel.gap_m, centre, &[("steady".into(), profile.clone(), curve)]), &path)
+        })
+        .transpose()?;
+    Ok(CaseResult {
+        case,
+        measure: format!(
+            "max |u - u_ref| / u_centre at t = {end} s (steady); nu0 = 1e-6, nu_inf = 2.5e-7 m^2/s; c = {} m/s",
+            channel.sound_speed_m_s
+        ),
+        error,
+        tolerance: 0.03,
+        at_least: false,
+        wall_s: started.elapsed().as_secs_f64(),
+        plot,
+    })
+}
+/// The channel of `operator` at `across` that the implicit solver can take: the paper's with
+/// the own-density gradient, or Morris's.
+fn implicit_ready(across: usize, operator: ViscosityOperator) -> Channel {
+    use crate::scene::VelocityGradient;
+    let velocity_gradient =
+        if operator == ViscosityOperator::Stress { VelocityGradient::OwnDensity } else { VelocityGradient::Sph };
+    Channel { velocity_gradient, ..Channel::morris(across, operator) }
+}
+/// `operator`'s name in the implicit cases.
+fn implicit_operator_name(operator: ViscosityOperator) -> &'static str {
+    if operator == ViscosityOperator::Stress {
+        "paper's operator (own density)"
+    } else {
+        "Morris's operator"
+    }
+}
+/// Start-up Poiseuille at `across` with implicit viscosity at `multiple` times Eq. (10)'s
+/// viscous bound, against the explicit solver on the same operator (the paper's with the
+/// own-density gradient, or Morris's) at the bound: the error against Morris et al.'s series may
+/// exceed the explicit solver's by at most 0.005 of the peak (what the larger dt may add).
+pub fn startup_poiseuille_implicit(across: usize, operator: ViscosityOperator, multiple: f64) -> Result<CaseResult, String> {
+    use crate::scene::ViscositySolver;
+    let explicit = implicit_ready(across, operator);
+    let implicit =
+        Channel { solver: ViscositySolver::Implicit, fixed_dt_s: Some(multiple * explicit.viscous_bound_s()), ..explicit };
+    let case =
+        format!("start-up Poiseuille, {}, implicit at {multiple} x the bound, {across} across", implicit_operator_name(operator));
+    startup_against_explicit(&explicit, &implicit, case, "at the bound")
+}
+/// Start-up Poiseuille in `other` against `explicit`, described by `reference`: the error
+/// against Morris et al.'s series may exceed the explicit solver's by at most 0.005 of the peak.
+pub(super) fn startup_against_explicit(
+    explicit: &Channel,
+    other: &Channel,
+    case: String,
+    reference: &str,
+) -> Result<CaseResult, String> {
+    let e = startup_poiseuille_in(explicit, None)?;
+    let o = startup_poiseuille_in(other, None)?;
+    Ok(CaseResult {
+        case,
+        measure: format!(
+            "max |u - u_ref| / u_max minus the explicit solver's {reference}: {:.4} against {:.4}; {:.1} s against {:.1} s",
+            o.error, e.error, o.wall_s, e.wall_s
+        ),
+        error: o.error - e.error,
+        tolerance: 0.005,
+        at_least: false,
+        wall_s: o.wall_s + e.wall_s,
+        plot: None,
+    })
+}
+/// Steady Poiseuille of the Cross fluid (K = `k_s` s, n = `n`) with implicit viscosity at
+/// `multiple` times the viscous bound: the steady profile within 0.002 of the centre speed of
+/// the explicit solver's on the same operator.
+pub fn cross_poiseuille_implicit(
+    across: usize,
+    operator: ViscosityOperator,
+    k_s: f64,
+    n: f64,
+    multiple: f64,
+) -> Result<CaseResult, String> {
+    use crate::scene::ViscositySolver;
+    let law = CrossLaw { nu_inf_m2_s: 0.25e-6, k_s, n };
+    let explicit = Channel { cross: Some(law), ..implicit_ready(across, operator) };
+    let implicit =
+        Channel { solver: ViscositySolver::Implicit, fixed_dt_s: Some(multiple * explicit.viscous_bound_s()), ..explicit };
+    let centre = cross_steady_velocity(&explicit, &law, &[0.5 * explicit.gap_m])[0];
+    let case = format!(
+        "steady Cross Poiseuille K = {k_s} s, n = {n}, {}, implicit at {multiple} x the bound, {across} across",
+        implicit_operator_name(operator)
+    );
+    cross_against_explicit(&explicit, &implicit, |_| centre, case, "implicit", "at the bound on the same operator")
+}
+/// The steady Cross channel `other` against `explicit`, described by `reference`, run to
+/// 0.75 L^2 / nu_inf: the largest difference of the profiles within 0.002 of the centre speed
+/// that `centre` reads from the explicit profile. `name` names `other`'s speed.
+pub(super) fn cross_against_explicit(
+    explicit: &Channel,
+    other: &Channel,
+    centre: impl Fn(&[[f64; 2]]) -> f64,
+    case: String,
+    name: &str,
+    reference: &str,
+) -> Result<CaseResult, String> {
+    let law = explicit.cross.expect("a Cross channel");
+    let end = 0.75 * explicit.gap_m * explicit.gap_m / law.nu_inf_m2_s;
+    let started = Instant::now();
+    let e = simulate(explicit, &[end])?.remove(0);
+    let explicit_s = started.elapsed().as_secs_f64();
+    let started = Instant::now();
+    let o = simulate(other, &[end])?.remove(0);
+    let other_s = started.elapsed().as_secs_f64();
+    let difference = e.iter().zip(&o).map(|(a, b)| (a[1] - b[1]).abs()).fold(0.0, f64::max) / centre(&e);
+    Ok(CaseResult {
+        case,
+        measure: format!(
+            "max |u_{name} - u_explicit| / u_centre at t = {end} s, the explicit solver {reference}; {other_s:.1} s against {explicit_s:.1} s"
+        ),
+        error: difference,
+        tolerance: 0.002,
+        at_least: false,
+        wall_s: other_s + explicit_s,
+        plot: None,
+    })
 }

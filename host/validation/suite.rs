@@ -1,15 +1,21 @@
 //! `coil validate`: the cases, which of them decide the verdict, and the table they fill.
 
+use super::case::{CaseResult, HOURGLASS_CONTROL};
 use super::divergence_free::{
     cross_poiseuille_divergence_free, huppert_divergence_free, startup_poiseuille_divergence_free, taylor_green_divergence_free,
 };
-use super::poiseuille::{Channel, CrossLaw};
-use super::viscous_thread::Treatment;
-use super::{
-    cross_poiseuille, cross_poiseuille_implicit, cross_poiseuille_in, huppert_implicit, huppert_spreading, hydrostatic_tank,
-    jet_buckling, jet_implicit, startup_poiseuille, startup_poiseuille_implicit, startup_poiseuille_in, taylor_green,
-    torus_implicit, torus_ordering, viscous_thread, CaseResult, HOURGLASS_CONTROL,
+use super::huppert::{huppert_implicit, huppert_spreading};
+use super::hydrostatic::hydrostatic_tank;
+use super::jet::{jet_buckling, jet_implicit};
+use super::poiseuille::{
+    cross_poiseuille, cross_poiseuille_implicit, cross_poiseuille_in, startup_poiseuille, startup_poiseuille_implicit,
+    startup_poiseuille_in,
 };
+use super::poiseuille::{Channel, CrossLaw};
+use super::taylor_green::taylor_green;
+use super::torus::{torus_implicit, torus_ordering};
+use super::viscous_thread::viscous_thread;
+use super::viscous_thread::Treatment;
 use crate::output::write_atomically;
 use crate::scene::{Pressure, ViscosityOperator, Walls};
 use std::fmt;

@@ -4,8 +4,9 @@
 //! Pareto front. Each trial runs a given number of times: its error must repeat to the bit (the
 //! CPU backend is deterministic), its wall time is the median.
 
+use super::case::{operator_label, HOURGLASS_CONTROL};
+use super::poiseuille::{cross_poiseuille_in, startup_poiseuille_in};
 use super::poiseuille::{Channel, CrossLaw};
-use super::{cross_poiseuille_in, operator_label, startup_poiseuille_in, HOURGLASS_CONTROL};
 use crate::output::plot::{Axis, Chart, Curve, Line, PALETTE};
 use crate::scene::{DensityKernelKind, Precision, VelocityGradient, ViscosityOperator, ViscositySolver, ViscousVelocity, Walls};
 use crate::statistics::Sorted;

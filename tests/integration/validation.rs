@@ -6,14 +6,18 @@ use crate::common;
 use coil::scene::{
     DensityKernelKind, Pressure, PressureGradient, VelocityGradient, ViscosityOperator, ViscositySolver, WallPressure, Walls,
 };
+use coil::validation::case::{HOURGLASS_CONTROL, MORRIS_TIMES};
 use coil::validation::divergence_free::taylor_green_divergence_free;
 use coil::validation::hydrostatic::{self, Tank};
-use coil::validation::poiseuille::{cross_steady_velocity, relative_max_error, simulate, startup_velocity, Channel, CrossLaw};
-use coil::validation::viscous_thread::Treatment;
-use coil::validation::{
+use coil::validation::poiseuille::{
     cross_poiseuille, cross_poiseuille_implicit, cross_poiseuille_in, startup_poiseuille, startup_poiseuille_implicit,
-    startup_poiseuille_in, taylor_green, torus_ordering, viscous_thread, HOURGLASS_CONTROL, MORRIS_TIMES,
+    startup_poiseuille_in,
 };
+use coil::validation::poiseuille::{cross_steady_velocity, relative_max_error, simulate, startup_velocity, Channel, CrossLaw};
+use coil::validation::taylor_green::taylor_green;
+use coil::validation::torus::torus_ordering;
+use coil::validation::viscous_thread::viscous_thread;
+use coil::validation::viscous_thread::Treatment;
 
 #[test]
 fn the_startup_series_starts_at_rest_and_ends_at_the_parabola() {
