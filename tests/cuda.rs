@@ -20,7 +20,6 @@ use coil::simulation::model::{
     cross_law, HourglassStressModel, LaplacianModel, Model, MorrisModel, ShearThinningMorrisModel, StressModel,
 };
 use coil::simulation::particles::Particles;
-use coil::simulation::Simulation;
 use coil_kernels::acceleration::AccelerationArgs;
 use coil_kernels::cell_grid::{HashArgs, Neighborhood};
 use coil_kernels::continuity_molteni2009::{ContinuityArgs, DensityIntegrationArgs};
@@ -362,7 +361,7 @@ fn both_with<R: Real, M: Model<R>>(
 ) -> (CpuSimulation<R, M>, GpuSimulation<R, M>) {
     let initial = initial_particles(scene, "test scene").expect("valid");
     let mut cpu = CpuSimulation::<R, M>::new(scene, &initial, model);
-    let mut on_gpu = GpuCpuSimulation::<R, M>::new_on_gpu(scene, &initial, model, gpu).expect("device state");
+    let mut on_gpu = GpuSimulation::<R, M>::new_on_gpu(scene, &initial, model, gpu).expect("device state");
     on_gpu.backend.check_every = 1;
     for _ in 0..steps {
         cpu.step_with(dt, coil::simulation::time_step::Limit::Acoustic).expect("stable on the CPU");
@@ -1175,7 +1174,7 @@ fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
 /// Bytes the device holds once `model`'s run of `scene` is on it, and what the run counts (the figure `coil run` prints and docs/benchmark.md's memory table comes from).
 fn held_and_counted<R: Real, M: Model<R>>(scene: &Scene, model: M) -> (usize, usize) {
     let initial = initial_particles(scene, "dam_break.toml").expect("particles");
-    let mut on_gpu = GpuCpuSimulation::<R, M>::new_on_gpu(scene, &initial, model, Gpu::emulated_with_memory(usize::MAX))
+    let mut on_gpu = GpuSimulation::<R, M>::new_on_gpu(scene, &initial, model, Gpu::emulated_with_memory(usize::MAX))
         .expect("device state");
     let (free, total) = on_gpu.backend.gpu().memory();
     (total - free, on_gpu.backend.memory_bytes())

@@ -11,9 +11,10 @@ use super::device_array::{vec3_view, vec3_view_mut, vec3_zeros, DeviceArray, Dev
 use super::gpu::{ByValue, CudaError, Gpu};
 use super::scan::scan_chunk_totals;
 use crate::cpu::sum_in_order;
-use crate::simulation::backend::{Backend, ImplicitViews, ParticleViews, Passes, PressureViews, Readout, Schedule};
+use crate::simulation::backend::{Backend, ParticleViews, Passes, Readout, Schedule};
 use crate::simulation::model::Model;
-use crate::simulation::particles::{HostParticles, ModelFields, Particles};
+use crate::simulation::host_particles::HostParticles;
+use crate::simulation::particles::{ImplicitViews, ModelFields, Particles, PressureViews};
 use crate::simulation::{Setup, Simulation, StepError};
 use coil_kernels::acceleration::AccelerationArgs;
 use coil_kernels::cell_grid::{HashArgs, Neighborhood};
