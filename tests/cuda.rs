@@ -1174,8 +1174,8 @@ fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
 /// Bytes the device holds once `model`'s run of `scene` is on it, and what the run counts (the figure `coil run` prints and docs/benchmark.md's memory table comes from).
 fn held_and_counted<R: Real, M: Model<R>>(scene: &Scene, model: M) -> (usize, usize) {
     let initial = initial_particles(scene, "dam_break.toml").expect("particles");
-    let mut on_gpu = GpuSimulation::<R, M>::new_on_gpu(scene, &initial, model, Gpu::emulated_with_memory(usize::MAX))
-        .expect("device state");
+    let mut on_gpu =
+        GpuSimulation::<R, M>::new_on_gpu(scene, &initial, model, Gpu::emulated_with_memory(usize::MAX)).expect("device state");
     let (free, total) = on_gpu.backend.gpu().memory();
     (total - free, on_gpu.backend.memory_bytes())
 }

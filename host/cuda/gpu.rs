@@ -7,172 +7,20 @@
 //! device's stream does, it runs launches later than they are queued: at the next copy,
 //! synchronisation or timing mark.
 
-use crate::splitmix64::{SplitMix64, GOLDEN_GAMMA};
-use coil_kernels::ptx::{Emulated, Param, ENTRIES};
+use crate::cuda::emulator::{lock, Emulator, HostMemory, QueuedLaunch, BLOCK};
+pub use crate::cuda::error::CudaError;
+use crate::cuda::kernel_module::{cubin_for, load_kernels, missing_driver_function, KernelCode};
+pub use crate::cuda::kernel_module::{CUBIN_ARCHS, DRIVER_FUNCTIONS, FATBIN, PTX};
+use coil_kernels::ptx::{Emulated, ENTRIES};
 use cudarc::driver::{
     sys, CudaContext, CudaEvent, CudaFunction, CudaModule, CudaSlice, CudaStream, DevicePtr, DeviceRepr, DriverError,
     LaunchConfig, PushKernelArg,
 };
-use cudarc::nvrtc::Ptx;
-use rayon::prelude::*;
 use std::collections::HashMap;
-use std::fmt;
 use std::mem::MaybeUninit;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::sync::Arc;
 use std::time::Instant;
-
-/// The kernels crate as PTX.
-pub const PTX: &str = include_str!(concat!(env!("OUT_DIR"), "/coil_kernels.ptx"));
-
-/// The kernels compiled ahead of time: a fatbin of cubins for [`CUBIN_ARCHS`] and the PTX, which
-/// the driver loads without compiling on those GPUs; empty where the build found no `ptxas`.
-pub const FATBIN: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/coil_kernels.fatbin"));
-
-/// The architectures of [`FATBIN`]'s cubins, as `sm_XY` numbers (`80,90`); empty without one.
-pub const CUBIN_ARCHS: &str = env!("COIL_CUBIN_ARCHS");
-
-/// Threads per block of every launch.
-const BLOCK: u32 = 256;
-
-/// The driver functions coil's calls reach through cudarc. cudarc looks each up at its first call
-/// and panics where the driver lacks it, so [`Gpu::open`] looks them all up first: a driver too
-/// old for one (the stream-ordered allocator came with CUDA 11.2) gives an error, not a panic
-/// in the middle of a run. The CUDA tests check the list against what the build links.
-pub const DRIVER_FUNCTIONS: &[&str] = &[
-    "cuCtxDestroy_v2",
-    "cuCtxGetCurrent",
-    "cuCtxSetCurrent",
-    "cuDeviceGet",
-    "cuDeviceGetAttribute",
-    "cuDeviceGetCount",
-    "cuDeviceGetName",
-    "cuDevicePrimaryCtxRelease_v2",
-    "cuDevicePrimaryCtxRetain",
-    "cuEventCreate",
-    "cuEventDestroy_v2",
-    "cuEventElapsedTime",
-    "cuEventRecord",
-    "cuEventSynchronize",
-    "cuGetErrorString",
-    "cuInit",
-    "cuLaunchKernel",
-    "cuMemAllocAsync",
-    "cuMemAlloc_v2",
-    "cuMemFreeAsync",
-    "cuMemFree_v2",
-    "cuMemGetInfo_v2",
-    "cuMemcpyDtoDAsync_v2",
-    "cuMemcpyDtoHAsync_v2",
-    "cuMemcpyHtoDAsync_v2",
-    "cuMemcpyPeerAsync",
-    "cuMemsetD8Async",
-    "cuModuleGetFunction",
-    "cuModuleLoad",
-    "cuModuleLoadData",
-    "cuModuleLoadDataEx",
-    "cuModuleUnload",
-    "cuStreamDestroy_v2",
-    "cuStreamSynchronize",
-    "cuStreamWaitEvent",
-];
-
-/// The first of [`DRIVER_FUNCTIONS`] the driver library lacks.
-fn missing_driver_function() -> Option<&'static str> {
-    // SAFETY: only called once `is_culib_present` found the library; looks symbols up, calls none.
-    let library = unsafe { sys::culib() };
-    DRIVER_FUNCTIONS.iter().copied().find(|name| unsafe { library.get::<*const std::ffi::c_void>(name.as_bytes()) }.is_err())
-}
-
-/// What the driver's JIT compiler says when it refuses `ptx`, the context current: cudarc's load
-/// passes no log buffer, so a refused module is loaded once more with one. `None` where the load
-/// succeeds or the log is empty.
-fn jit_error_log(ptx: &str) -> Option<String> {
-    const LOG_BYTES: usize = 16 * 1024;
-    let source = std::ffi::CString::new(ptx).ok()?;
-    let mut log = vec![0u8; LOG_BYTES];
-    let mut options = [sys::CUjit_option::CU_JIT_ERROR_LOG_BUFFER, sys::CUjit_option::CU_JIT_ERROR_LOG_BUFFER_SIZE_BYTES];
-    // The driver reads the buffer's size from the pointer-sized value itself.
-    let mut values = [log.as_mut_ptr().cast::<std::ffi::c_void>(), LOG_BYTES as *mut std::ffi::c_void];
-    let mut module = std::ptr::null_mut();
-    // SAFETY: the options and their values are paired as the driver reads them, the log buffer
-    // is LOG_BYTES long and outlives the call, and `Gpu::open` found the function.
-    let result =
-        unsafe { sys::cuModuleLoadDataEx(&mut module, source.as_ptr().cast(), 2, options.as_mut_ptr(), values.as_mut_ptr()) };
-    if result == sys::CUresult::CUDA_SUCCESS {
-        // SAFETY: the module just loaded and nothing else holds it.
-        unsafe { sys::cuModuleUnload(module) };
-        return None;
-    }
-    let end = log.iter().position(|&b| b == 0).unwrap_or(LOG_BYTES);
-    let text = String::from_utf8_lossy(&log[..end]).trim().to_string();
-    (!text.is_empty()).then_some(text)
-}
-
-/// 0..n in an order drawn from `seed` (Fisher-Yates over a SplitMix64 stream).
-fn shuffled(n: usize, seed: u64) -> Vec<usize> {
-    let mut stream = SplitMix64(seed);
-    let mut order: Vec<usize> = (0..n).collect();
-    for k in (1..n).rev() {
-        order.swap(k, (stream.next_u64() % (k as u64 + 1)) as usize);
-    }
-    order
-}
-
-/// Why the CUDA backend cannot run.
-#[derive(Debug)]
-pub enum CudaError {
-    /// No CUDA driver library (libcuda) on this machine.
-    NoDriver,
-    /// The driver library lacks a function coil calls: an older driver.
-    OldDriver(&'static str),
-    /// The driver loaded but reports no device.
-    NoDevice,
-    /// A device allocation failed.
-    OutOfMemory { what: String, bytes: usize, free: usize, total: usize },
-    /// The driver refused the PTX module; `log` is its JIT compiler's error log, where it wrote one.
-    PtxLoad { error: DriverError, log: Option<String> },
-    /// A kernel is missing from the PTX module.
-    MissingKernel(String),
-    /// A launch, or the work queued before a synchronisation, failed.
-    Launch { kernel: String, error: DriverError },
-    /// Any other driver call failed.
-    Driver { call: &'static str, error: DriverError },
-}
-
-impl fmt::Display for CudaError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            CudaError::NoDriver => f.write_str(
-                "no CUDA driver: libcuda.so was not found (install the NVIDIA driver, or add its folder to LD_LIBRARY_PATH); use --backend cpu",
-            ),
-            CudaError::OldDriver(function) => write!(
-                f,
-                "the CUDA driver lacks {function}, which coil calls: it is older than coil needs (CUDA 11.2 or newer); update the NVIDIA driver, or use --backend cpu"
-            ),
-            CudaError::NoDevice => f.write_str("the CUDA driver reports no device; use --backend cpu"),
-            CudaError::OutOfMemory { what, bytes, free, total } => write!(
-                f,
-                "out of device memory allocating {what}: {bytes} bytes needed, {free} of {total} bytes free; lower the particle count (spacing, max_fluid_particles)"
-            ),
-            CudaError::PtxLoad { error, log } => {
-                write!(f, "the CUDA driver could not load coil's PTX ({error})")?;
-                if let Some(log) = log {
-                    write!(f, "; its JIT compiler says: {log}")?;
-                }
-                f.write_str("; the driver may be older than the PTX ISA: update it, or set COIL_PTX_TARGET_CPU and rebuild")
-            }
-            CudaError::MissingKernel(name) => write!(f, "kernel {name} is missing from coil's PTX module (a stale build?)"),
-            CudaError::Launch { kernel, error } => write!(
-                f,
-                "CUDA kernel {kernel} failed: {error} (kernels run asynchronously: set COIL_CUDA_SYNC=1 to name the failing one exactly)"
-            ),
-            CudaError::Driver { call, error } => write!(f, "CUDA call {call} failed: {error}"),
-        }
-    }
-}
-
-impl std::error::Error for CudaError {}
 
 /// A kernel argument passed by value: the bytes of a `#[repr(C)]` argument struct, which the
 /// PTX entry receives as `.param .b8 [size]`.
@@ -193,99 +41,11 @@ struct Device {
     code: KernelCode,
 }
 
-/// How the kernels reached the device.
-enum KernelCode {
-    /// [`FATBIN`]: a cubin where one fits the device, the PTX JIT-compiled where none does.
-    Fatbin,
-    /// [`PTX`] alone, JIT-compiled by the driver: the build had no `ptxas`, or the driver refused
-    /// the fatbin (one older than the `ptxas` that compiled it).
-    Ptx { fatbin_refused: Option<DriverError> },
-}
-
-/// Loads the kernels: [`FATBIN`] where the build made one and the driver takes it, else [`PTX`].
-fn load_kernels(ctx: &Arc<CudaContext>) -> Result<(Arc<CudaModule>, KernelCode), CudaError> {
-    let mut fatbin_refused = None;
-    if !FATBIN.is_empty() {
-        match ctx.load_module(Ptx::from_binary(FATBIN.to_vec())) {
-            Ok(module) => return Ok((module, KernelCode::Fatbin)),
-            Err(error) => fatbin_refused = Some(error),
-        }
-    }
-    match ctx.load_module(Ptx::from_src(PTX)) {
-        Ok(module) => Ok((module, KernelCode::Ptx { fatbin_refused })),
-        Err(error) => Err(CudaError::PtxLoad { error, log: jit_error_log(PTX) }),
-    }
-}
-
-/// The cubin of [`CUBIN_ARCHS`] the driver picks for a device of compute capability
-/// `major.minor`: the newest of its major version not above it.
-fn cubin_for(major: i32, minor: i32) -> Option<u32> {
-    let device = (major * 10 + minor) as u32;
-    CUBIN_ARCHS.split(',').filter_map(|a| a.parse::<u32>().ok()).filter(|&a| a / 10 == device / 10 && a <= device).max()
-}
-
 /// What runs the kernels.
 enum Engine {
     Cuda(Device),
     /// The kernels' host builds, over host memory.
     Emulated(Emulator),
-}
-
-/// The emulated device: what its buffers hold, against a size where one is set, the launches
-/// it has queued, which seed each launch's thread order, and the work not yet run.
-struct Emulator {
-    /// Bytes allocated and not yet freed; shared with the buffers, which give theirs back.
-    used: Arc<AtomicUsize>,
-    /// The device's size (bytes); `None` for as much as the host has.
-    total: Option<usize>,
-    launches: u64,
-    /// Shared with the buffers, whose memory a queued launch may still use when they go.
-    stream: Arc<Mutex<Stream>>,
-}
-
-/// The emulated device's stream: launches queued and not yet run, and the memory of buffers
-/// dropped after them, freed once they have run, as a device frees in stream order.
-#[derive(Default)]
-struct Stream {
-    launches: Vec<QueuedLaunch>,
-    freed: Vec<Box<[u64]>>,
-}
-
-/// A launch as the emulated device queues it: its parameters' bytes copied, as a driver copies
-/// them, so the host may reuse its own.
-struct QueuedLaunch {
-    entry: Emulated,
-    params: Vec<Vec<MaybeUninit<u8>>>,
-    blocks: u32,
-    /// Seeds the order of its blocks and threads.
-    seed: u64,
-}
-
-impl QueuedLaunch {
-    fn run(self) {
-        let params: Vec<Param> = self
-            .params
-            .iter()
-            // SAFETY: the bytes outlive the launch, which returns before they go.
-            .map(|p| unsafe { Param::from_raw(p.as_ptr().cast(), p.len()) })
-            .collect();
-        let (entry, seed) = (self.entry, self.seed);
-        // A device runs blocks and the warps in them in no set order: each launch shuffles
-        // both, from its own seed, so that a kernel whose result depends on the order differs
-        // from the CPU and fails the tests.
-        shuffled(self.blocks as usize, seed).into_par_iter().for_each(|block| {
-            for t in shuffled(BLOCK as usize, seed ^ (block as u64 + 1).wrapping_mul(GOLDEN_GAMMA)) {
-                // SAFETY: as for the device: the caller of `Gpu::launch` vouched for the
-                // arguments and views, whose memory a dropped buffer keeps until this has run.
-                unsafe { entry(block * BLOCK as usize + t, &params) };
-            }
-        });
-    }
-}
-
-/// The stream, locked; a launch that panicked (a kernel's bounds check) left it usable.
-fn lock(stream: &Mutex<Stream>) -> MutexGuard<'_, Stream> {
-    stream.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 pub struct Gpu {
@@ -301,44 +61,6 @@ pub struct Gpu {
 pub enum Buffer {
     Device(CudaSlice<u8>),
     Host(HostMemory),
-}
-
-/// Host memory that kernels on the emulated device write through raw pointers, as device
-/// memory is written: it is held by pointer, never borrowed for longer than one copy. In words,
-/// so that every element type is aligned.
-pub struct HostMemory {
-    words: *mut u64,
-    len: usize,
-    /// The bytes asked for, which the device counts as in use until the buffer is dropped.
-    bytes: usize,
-    used: Arc<AtomicUsize>,
-    /// Where a buffer dropped while launches are queued leaves its memory.
-    stream: Arc<Mutex<Stream>>,
-}
-
-// SAFETY: the memory is owned; the run that owns the buffer is the only one to reach it.
-unsafe impl Send for HostMemory {}
-
-impl HostMemory {
-    fn zeroed(bytes: usize, emulator: &Emulator) -> Self {
-        let words: Box<[u64]> = vec![0; bytes.div_ceil(8).max(1)].into_boxed_slice();
-        let len = words.len();
-        emulator.used.fetch_add(bytes, Ordering::Relaxed);
-        let (used, stream) = (emulator.used.clone(), emulator.stream.clone());
-        Self { words: Box::into_raw(words).cast(), len, bytes, used, stream }
-    }
-}
-
-impl Drop for HostMemory {
-    fn drop(&mut self) {
-        // SAFETY: `words` came from `Box::into_raw` of `len` words, and is dropped once.
-        let words = unsafe { Box::from_raw(std::ptr::slice_from_raw_parts_mut(self.words, self.len)) };
-        let mut stream = lock(&self.stream);
-        if !stream.launches.is_empty() {
-            stream.freed.push(words);
-        }
-        self.used.fetch_sub(self.bytes, Ordering::Relaxed);
-    }
 }
 
 /// A point in a stream's work, for timing: an event on a device, an instant on the emulated

@@ -5,9 +5,15 @@
 #[cfg(feature = "cuda")]
 pub mod device_array;
 #[cfg(feature = "cuda")]
+mod emulator;
+#[cfg(feature = "cuda")]
+pub mod error;
+#[cfg(feature = "cuda")]
 pub mod gpu;
 #[cfg(feature = "cuda")]
 pub mod gpu_simulation;
+#[cfg(feature = "cuda")]
+pub mod kernel_module;
 pub mod peak_rates;
 #[cfg(feature = "cuda")]
 pub mod scan;
