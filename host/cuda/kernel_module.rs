@@ -18,7 +18,7 @@ pub const FATBIN: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/coil_kernels
 pub const CUBIN_ARCHS: &str = env!("COIL_CUBIN_ARCHS");
 
 /// The driver functions coil's calls reach through cudarc. cudarc looks each up at its first call
-/// and panics where the driver lacks it, so [`Gpu::open`] looks them all up first: a driver too
+/// and panics where the driver lacks it, so [`Gpu::open`](crate::cuda::gpu::Gpu::open) looks them all up first: a driver too
 /// old for one (the stream-ordered allocator came with CUDA 11.2) gives an error, not a panic
 /// in the middle of a run. The CUDA tests check the list against what the build links.
 pub const DRIVER_FUNCTIONS: &[&str] = &[

@@ -5,11 +5,15 @@
 #[cfg(feature = "cuda")]
 pub mod device_array;
 #[cfg(feature = "cuda")]
+mod device_state;
+#[cfg(feature = "cuda")]
 mod emulator;
 #[cfg(feature = "cuda")]
 pub mod error;
 #[cfg(feature = "cuda")]
 pub mod gpu;
+#[cfg(feature = "cuda")]
+mod gpu_passes;
 #[cfg(feature = "cuda")]
 pub mod gpu_simulation;
 #[cfg(feature = "cuda")]
