@@ -7,10 +7,10 @@ use crate::scene::{Boundary, Domain, FluidBlock, Precision, Pressure, Scene, Sce
 use crate::simulation::backend::Backend as _;
 use crate::simulation::inlet::Inlet;
 use crate::simulation::model::Model;
-use crate::simulation::time_step::{Limit, StabilityBound, TimeStepper};
 use crate::simulation::variant::{with_precision_and_model, WithModel};
 #[cfg(feature = "cuda")]
 use crate::simulation::Setup;
+use crate::time_step::{Limit, StabilityBound, TimeStepper};
 use coil_kernels::Real;
 use std::fmt;
 use std::time::{Duration, Instant};

@@ -12,4 +12,5 @@ pub mod scene;
 pub mod simulation;
 pub mod splitmix64;
 pub mod statistics;
+pub mod time_step;
 pub mod validation;

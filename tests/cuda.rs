@@ -364,8 +364,8 @@ fn both_with<R: Real, M: Model<R>>(
     let mut on_gpu = GpuSimulation::<R, M>::new_on_gpu(scene, &initial, model, gpu).expect("device state");
     on_gpu.backend.check_every = 1;
     for _ in 0..steps {
-        cpu.step_with(dt, coil::simulation::time_step::Limit::Acoustic).expect("stable on the CPU");
-        on_gpu.step_with(dt, coil::simulation::time_step::Limit::Acoustic).expect("stable on the device");
+        cpu.step_with(dt, coil::time_step::Limit::Acoustic).expect("stable on the CPU");
+        on_gpu.step_with(dt, coil::time_step::Limit::Acoustic).expect("stable on the device");
     }
     on_gpu.sync().expect("download");
     (cpu, on_gpu)
@@ -502,7 +502,7 @@ fn an_unstable_gpu_run_is_stopped_by_the_guard() {
         let mut sim = GpuSimulation::<f32, _>::new_on_gpu(&scene, &initial, model, engine.open()).expect("device state");
         sim.backend.check_every = 1;
         let bound = sim.run.stepper.bound.dt().0;
-        let stopped = (0..2000).find_map(|_| sim.step_with(50.0 * bound, coil::simulation::time_step::Limit::Fixed).err());
+        let stopped = (0..2000).find_map(|_| sim.step_with(50.0 * bound, coil::time_step::Limit::Fixed).err());
         match stopped {
             Some(coil::cuda::GpuStepError::Unstable(i)) => assert!(i.dt_s > i.stability_bound_s),
             other => panic!("{engine:?}: expected the guard to stop the run, got {other:?}"),
@@ -667,7 +667,7 @@ fn particle_shifting_on_the_gpu_agrees_with_the_cpu() {
     let initial = initial_particles(&small_jet(), "test scene").expect("valid");
     let mut unshifted = CpuSimulation::<f64, _>::new(&small_jet(), &initial, model);
     for _ in 0..300 {
-        unshifted.step_with(2e-4, coil::simulation::time_step::Limit::Acoustic).expect("stable");
+        unshifted.step_with(2e-4, coil::time_step::Limit::Acoustic).expect("stable");
     }
     for engine in engines() {
         let (cpu, on_gpu) = both_with::<f64, _>(engine.open(), &scene, model, 300, 2e-4);
@@ -702,7 +702,7 @@ fn a_gradient_estimate_on_the_gpu_agrees_with_the_cpu<G: GradientEstimate>(choic
     let initial = initial_particles(&small_jet(), "test scene").expect("valid");
     let mut printed = CpuSimulation::<f64, _>::new(&small_jet(), &initial, StressModel(Newtonian { nu0: 0.001 }, KernelSum));
     for _ in 0..300 {
-        printed.step_with(2e-4, coil::simulation::time_step::Limit::Acoustic).expect("stable");
+        printed.step_with(2e-4, coil::time_step::Limit::Acoustic).expect("stable");
     }
     let printed: std::collections::HashMap<u32, [f64; 3]> =
         state_by_id(printed.particles()).into_iter().map(|(id, x, _)| (id, x)).collect();

@@ -22,8 +22,8 @@ use crate::scene::Scene;
 use crate::simulation::model::Model;
 use crate::simulation::particles::Particles;
 use crate::simulation::run_state::SolveStatistics;
-use crate::simulation::time_step::Limit;
 use crate::simulation::{Diagnostics, RunState, Setup};
+use crate::time_step::Limit;
 use coil_kernels::Real;
 use std::path::Path;
 

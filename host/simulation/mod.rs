@@ -13,7 +13,6 @@ pub mod particles;
 pub mod run_state;
 mod schedule;
 pub mod sorted_grid;
-pub mod time_step;
 pub mod variant;
 
 use crate::scene::setup::{calibrated_kernels, calibrated_mass, fastest_start_speed, rest_volume, InitialParticles};
@@ -23,7 +22,7 @@ use crate::simulation::inlet::Inlet;
 use crate::simulation::model::Model;
 use crate::simulation::particles::Particles;
 use crate::simulation::sorted_grid::SortedGrid;
-use crate::simulation::time_step::{Cfl, Limit, StabilityBound, TimeStepper};
+use crate::time_step::{Cfl, Limit, StabilityBound, TimeStepper};
 use backend::Backend;
 use coil_kernels::cross_viscosity::Rheology;
 use coil_kernels::diagnostics::StateFigures;

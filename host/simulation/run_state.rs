@@ -7,7 +7,7 @@ use crate::scene::{DensityKernelKind, DivergenceFree, ImplicitViscosity, NoConve
 use crate::simulation::inlet::Inlet;
 use crate::simulation::model::{Model, SolveReport};
 use crate::simulation::particles::Particles;
-use crate::simulation::time_step::{Limit, TimeStepper};
+use crate::time_step::{Limit, TimeStepper};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::nozzle::NozzleTube;
 use coil_kernels::shifting_sun2017::Shifting;

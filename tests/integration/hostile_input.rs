@@ -523,8 +523,7 @@ fn try_scene(text: &str, out: &Path) -> Outcome {
     let mut scene = scene;
     let h = scene.support_radius();
     let v = scene.material.viscosity;
-    let (bound, _) =
-        coil::simulation::time_step::StabilityBound::new(h, scene.material.sound_speed_m_s, v.nu0_m2_s.max(v.nu_inf())).dt();
+    let (bound, _) = coil::time_step::StabilityBound::new(h, scene.material.sound_speed_m_s, v.nu0_m2_s.max(v.nu_inf())).dt();
     let dt = scene.simulation.time_step.fixed_s.unwrap_or(bound * scene.simulation.time_step.safety_factor);
     scene.simulation.end_time_s = scene.simulation.end_time_s.min(3.5 * dt);
     scene.output.every_s = None;

@@ -6,7 +6,7 @@ use crate::common;
 use coil::cpu::simulation::CpuSimulation;
 use coil::scene::setup::initial_particles;
 use coil::simulation::model::StressModel;
-use coil::simulation::time_step::Limit;
+use coil::time_step::Limit;
 use coil_kernels::cross_viscosity::Newtonian;
 use coil_kernels::velocity_gradient::KernelSum;
 use common::jet_scene;

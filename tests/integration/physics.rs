@@ -96,7 +96,7 @@ fn pressure_and_viscous_forces_conserve_momentum() {
             sim.particles_mut().velocity_half[a][i] = sim.particles_mut().velocity[a][i];
         }
     }
-    sim.step_with(1e-5, coil::simulation::time_step::Limit::Fixed).expect("stable");
+    sim.step_with(1e-5, coil::time_step::Limit::Fixed).expect("stable");
     let mut total = [0.0f64; 3];
     let mut scale = 0.0f64;
     for i in 0..n {
@@ -172,7 +172,7 @@ fn neighbor_search_equals_brute_force() {
         }
     }
     // One step re-sorts the jittered particles; compare on the sorted state.
-    sim.step_with(1e-9, coil::simulation::time_step::Limit::Fixed).expect("stable");
+    sim.step_with(1e-9, coil::time_step::Limit::Fixed).expect("stable");
     let n = sim.particles().len();
     let h2 = sim.run.fluid.kernels.h2;
     let nb = sim.host().neighborhood();

@@ -417,7 +417,7 @@ fn set_overrides_any_field_with_the_files_validation() {
 #[test]
 fn check_reports_counts_the_equation_10_bound_and_a_calibrated_estimate() {
     use coil::check::check;
-    use coil::simulation::time_step::Limit;
+    use coil::time_step::Limit;
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let dam = Scene::load(&dir.join("dam_break.toml")).expect("valid");
     let r = check(&dam, "dam_break.toml", None, std::time::Duration::from_millis(200)).expect("valid");

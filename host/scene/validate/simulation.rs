@@ -5,7 +5,7 @@ use super::{CFL_FACTOR, MAX_FRAMES, MAX_IMPLICIT_ITERATIONS, MAX_STEPS, MAX_TIME
 use crate::scene::material::{DensityEquation, DensityKernelKind, Material, MAX_PARTICLE_SHIFTING};
 use crate::scene::settings::{DivergenceFree, Pressure, SimulationSettings, ViscousVelocity, Walls};
 use crate::scene::{short, Domain, Output};
-use crate::simulation::time_step::{Cfl, Limit, StabilityBound, TimeStepper};
+use crate::time_step::{Cfl, Limit, StabilityBound, TimeStepper};
 
 impl Check<'_> {
     /// `h`: the support radius (m).
