@@ -9,7 +9,7 @@ use crate::simulation::sorted_grid::SortedGrid;
 use coil_kernels::cell_grid::{hash_pass, HashArgs, Neighborhood};
 use coil_kernels::counting_sort::{
     chunk_total, count_particle, gather, scan_by_levels, scan_chunk, scan_chunk_in_place, scan_chunk_offsets, scan_levels_len,
-    scatter, sort_bucket, sum_chunk, Counters, ScanStep,
+    scatter, sort_bucket, sum_chunk, Counters, ScanStep, CPU_SCAN_CHUNK,
 };
 use coil_kernels::fluid_cells::{holds_fluid_pass, near_fluid_pass, HoldsFluidArgs, NearFluidArgs};
 use coil_kernels::neighbor_list::{neighbor_list_pass, ListedNeighborhood, NeighborListArgs, NEIGHBOR_SLOTS};
@@ -18,9 +18,6 @@ use coil_kernels::topology::{Open, Topology};
 use coil_kernels::view::{Vec3View, View, ViewMut};
 use coil_kernels::Real;
 use std::sync::atomic::{AtomicU32, Ordering};
-
-/// Buckets per scan chunk.
-pub const SCAN_CHUNK: usize = 4096;
 
 /// The CPU's arrays for sorting particles into a [`SortedGrid`], and its neighbor lists.
 pub struct GridSort {
@@ -43,7 +40,7 @@ impl GridSort {
             cell_key: ParticleArray::zeros(capacity),
             counters: (0..buckets).map(|_| AtomicU32::new(0)).collect(),
             order: ParticleArray::zeros(capacity),
-            chunk_offsets: vec![0; scan_levels_len(buckets.div_ceil(SCAN_CHUNK))],
+            chunk_offsets: vec![0; scan_levels_len(buckets.div_ceil(CPU_SCAN_CHUNK))],
             holds_fluid: if cells.tracks_fluid().is_some() { vec![0; buckets - 1] } else { Vec::new() },
             neighbor_list: ParticleArray::default(),
         }
@@ -125,11 +122,11 @@ impl GridSort {
         launch(n, |i| count_particle(i, keys, counters));
 
         // Exclusive scan: chunk totals in parallel, their offsets by levels, then each chunk.
-        let chunks = buckets.div_ceil(SCAN_CHUNK);
+        let chunks = buckets.div_ceil(CPU_SCAN_CHUNK);
         let levels = ViewMut::new(&mut self.chunk_offsets);
         let totals = levels.range(0, chunks);
         // SAFETY: invocation c writes only entry c.
-        launch(chunks, |c| unsafe { totals.write(c, chunk_total(c, SCAN_CHUNK, counters)) });
+        launch(chunks, |c| unsafe { totals.write(c, chunk_total(c, CPU_SCAN_CHUNK, counters)) });
         let level = |(start, len): (usize, usize)| levels.range(start, len);
         let scanned = scan_by_levels::<std::convert::Infallible>(chunks, |step| {
             match step {
@@ -149,7 +146,7 @@ impl GridSort {
         let Ok(()) = scanned;
         let offsets = totals.read();
         let starts = ViewMut::new(cells.cell_start_mut());
-        launch(chunks, |c| scan_chunk(c, SCAN_CHUNK, offsets.at(c), counters, starts));
+        launch(chunks, |c| scan_chunk(c, CPU_SCAN_CHUNK, offsets.at(c), counters, starts));
 
         let order = view_mut(&mut self.order, n);
         launch(n, |i| scatter(i, keys, counters, order));

@@ -5,19 +5,16 @@ use super::device_array::{vec3_view_mut, vec3_zeros, DeviceArray, DeviceVec3};
 use super::gpu::{CudaError, Gpu};
 use crate::simulation::particles::{ImplicitViews, ModelFields, PressureViews};
 use coil_kernels::counting_sort::scan_levels_len;
+use coil_kernels::counting_sort::DEVICE_SCAN_CHUNK;
 use coil_kernels::dfsph_bender2017::ERROR_RANGE;
 use coil_kernels::diagnostics::StateFigures;
 use coil_kernels::view::SymTensorViewMut;
 use coil_kernels::viscosity::implicit_weiler2018::DOT_RANGE;
 use coil_kernels::Real;
 
-/// Buckets per scan chunk on the device: more, shorter chunks than on the CPU keep each
-/// thread's loop short; their totals are scanned level by level (`super::scan`).
-pub(super) const SCAN_CHUNK: usize = 64;
-
 /// Scan chunks of `buckets` buckets.
 pub(super) fn buckets_chunks(buckets: usize) -> usize {
-    buckets.div_ceil(SCAN_CHUNK)
+    buckets.div_ceil(DEVICE_SCAN_CHUNK)
 }
 
 /// Particles per range of the diagnostics reduction.

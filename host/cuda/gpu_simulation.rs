@@ -8,7 +8,7 @@
 //! reads the diagnostics (largest speed, compression, runaway particles) and the count.
 
 use super::device_array::{vec3_view, vec3_view_mut, vec3_zeros, DeviceArray};
-use super::device_state::{buckets_chunks, DeviceState, DIAGNOSTICS_RANGE, SCAN_CHUNK};
+use super::device_state::{buckets_chunks, DeviceState, DIAGNOSTICS_RANGE};
 use super::gpu::{ByValue, CudaError, Gpu};
 use super::gpu_passes::{kernel, GpuPasses};
 use super::scan::scan_chunk_totals;
@@ -18,7 +18,7 @@ use crate::simulation::model::Model;
 use crate::simulation::particles::{ModelFields, Particles};
 use crate::simulation::{Setup, Simulation, StepError};
 use coil_kernels::cell_grid::{HashArgs, Neighborhood};
-use coil_kernels::counting_sort::{Gathered, ReorderArgs};
+use coil_kernels::counting_sort::{Gathered, ReorderArgs, DEVICE_SCAN_CHUNK};
 use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::fluid_cells::{HoldsFluidArgs, NearFluidArgs};
@@ -178,7 +178,7 @@ impl<R: Real> CudaBackend<R> {
         let hash = HashArgs { grid, position: vec3_view(&d.position, n), cell_key: d.cell_key.view_mut(n) };
         let keys = ByValue(d.cell_key.view(n));
         let counters = ByValue(d.counters.counters());
-        let chunk = ByValue(SCAN_CHUNK as u32);
+        let chunk = ByValue(DEVICE_SCAN_CHUNK as u32);
         // SAFETY: each argument list is its entry's in `coil_kernels::ptx`, over arrays sized
         // to the capacity (particles) or to the grid (buckets, chunks).
         unsafe {

@@ -92,6 +92,15 @@ pub fn scan_chunk_offsets(totals: ViewMut<u32>) {
 /// Chunk totals summed per level of the scan that gives their offsets.
 pub const SCAN_FAN_IN: usize = 64;
 
+/// Buckets per scan chunk on the CPU: a chunk is one rayon task, and long chunks keep a few
+/// thousand tasks at a million cells, where short ones would cost more in scheduling than in
+/// adding.
+pub const CPU_SCAN_CHUNK: usize = 4096;
+
+/// Buckets per scan chunk on the device: a chunk is one thread's loop, and short chunks keep it
+/// short while the grid has threads to spare; their totals are scanned level by level.
+pub const DEVICE_SCAN_CHUNK: usize = 64;
+
 /// The levels of the exclusive scan of `totals` chunk totals, kept one after the other in one
 /// array: level 0 holds the totals, each next level the sums of `SCAN_FAN_IN` entries of the
 /// one before, up to a level of at most `SCAN_FAN_IN` entries, which one invocation scans. A
