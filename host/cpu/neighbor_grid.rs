@@ -150,7 +150,7 @@ impl GridSort {
 
         let order = view_mut(&mut self.order, n);
         launch(n, |i| scatter(i, keys, counters, order));
-        let starts = View::new(cells.cell_start_mut());
+        let starts = View::new(cells.cell_start());
         launch(grid.cell_count() as usize, |c| sort_bucket(c, starts, order));
 
         let live = cells.live();

@@ -142,8 +142,8 @@ impl<R: Real> CudaBackend<R> {
                 device.upload(gpu, &host[..n])?;
             }
         }
-        d.cell_start.upload(gpu, self.mirror.grid.cell_start_mut())?;
-        d.near_fluid.upload(gpu, self.mirror.grid.near_fluid_mut())?;
+        d.cell_start.upload(gpu, self.mirror.grid.cell_start())?;
+        d.near_fluid.upload(gpu, self.mirror.grid.near_fluid())?;
         d.count.upload(gpu, &[n as u32])?;
         gpu.synchronize()
     }

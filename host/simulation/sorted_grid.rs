@@ -60,6 +60,16 @@ impl SortedGrid {
         self.periodic.period.iter().any(|&l| l > 0.0)
     }
 
+    /// The start of each bucket's run, as the last sort left it.
+    pub fn cell_start(&self) -> &[u32] {
+        &self.cell_start
+    }
+
+    /// The near-fluid marks, as the last sort left them.
+    pub fn near_fluid(&self) -> &[u8] {
+        &self.near_fluid
+    }
+
     /// The start of each bucket's run, for a sort to fill in.
     pub fn cell_start_mut(&mut self) -> &mut [u32] {
         &mut self.cell_start
