@@ -1624,3 +1624,62 @@ fn device_faults_give_clear_errors() {
     assert!(stderr.contains(&format!("error: CUDA kernel {faulted} failed: ")), "{stderr}");
     std::fs::remove_dir_all(&root).ok();
 }
+
+/// The carried state (`coil::visit_carried!`) on the device: a run's every carried array,
+/// marked, scrambled and resumed onto each engine, is uploaded, sorted and downloaded with each
+/// entry following its particle, and a particle an inlet appends starts as the list says.
+#[test]
+fn every_carried_array_follows_its_particle_on_the_device() {
+    use coil::run::checkpoint::{encode, Checkpoint};
+    use coil::simulation::variant::{with_precision_and_model, WithModel};
+    use coil::simulation::Setup;
+    use common::carried::{by_id, carrying_scene, Mark, Permute, Starts, NEW_ID, NEW_POSITION, NEW_VELOCITY};
+    use std::marker::PhantomData;
+
+    struct OnDevice<'a>(&'a Scene, Engine);
+    impl WithModel for OnDevice<'_> {
+        type Output = ();
+        fn with<R: Real, M: Model<R>>(self, model: M) {
+            let (scene, engine) = (self.0, self.1);
+            let initial = initial_particles(scene, "jet").expect("valid");
+            let mut cpu = CpuSimulation::<R, M>::new(scene, &initial, model);
+            for _ in 0..30 {
+                cpu.step().expect("stable");
+            }
+            let n = cpu.particles().len();
+            let ids = cpu.particles().id[..n].to_vec();
+            coil::visit_carried!(mut &mut Mark::<R> { ids, component: 0, real: PhantomData }; cpu.particles_mut());
+            let before = by_id(cpu.particles());
+            let reversed: Vec<usize> = (0..n).rev().collect();
+            coil::visit_carried!(mut &mut Permute::<R> { order: &reversed, real: PhantomData }; cpu.particles_mut());
+            let scrambled = cpu.particles().id[..n].to_vec();
+
+            let bytes = encode(&cpu.run, cpu.particles(), scene, &coil::run::Tally::default());
+            let mut setup = Setup::<R, M>::new(scene, &initial, model);
+            Checkpoint::decode(bytes).expect("a checkpoint").restore(&mut setup).expect("it fits the scene");
+            let mut gpu = GpuSimulation::<R, M>::on_gpu(setup, engine.open()).expect("device state");
+            gpu.backend.sort_and_reorder().expect("the device's sort");
+            gpu.backend.download().expect("download");
+            let p = &gpu.backend.host().particles;
+            assert_ne!(p.id[..n], scrambled[..], "{engine:?}: the sort moved the particles");
+            assert_eq!(by_id(p), before, "{engine:?}: every carried entry followed its particle");
+
+            let (staging, _) = gpu.backend.inlet_staging();
+            staging.push(NEW_ID, NEW_POSITION, NEW_VELOCITY);
+            gpu.backend.append_staged(1).expect("append");
+            gpu.backend.download().expect("download");
+            let p = &gpu.backend.host().particles;
+            assert_eq!(p.len(), n + 1);
+            let mut starts = Starts::<R> { i: n, wrong: Vec::new(), real: PhantomData };
+            coil::visit_carried!(ref &mut starts; p);
+            assert!(starts.wrong.is_empty(), "{engine:?}: {:?}", starts.wrong);
+        }
+    }
+
+    for engine in engines() {
+        for precision in ["f32", "f64"] {
+            let scene = carrying_scene(precision);
+            with_precision_and_model(scene.simulation.precision, &scene, OnDevice(&scene, engine));
+        }
+    }
+}

@@ -3,6 +3,7 @@
 //! particles that left the domain box.
 
 use crate::cpu::parallel::launch;
+use crate::simulation::carried_state::{Carried, VisitCarried};
 use crate::simulation::particle_array::ParticleArray;
 use crate::simulation::particles::{view_mut, Particles};
 use crate::simulation::sorted_grid::SortedGrid;
@@ -212,39 +213,57 @@ impl NeighborGrid {
     }
 }
 
-/// Permutes every field that carries state from step to step (positions, both velocities,
-/// ids, and density where the continuity equation integrates it) into sorted order; fields
-/// recomputed each step are left alone.
+/// Permutes every array that carries state from step to step (`carried_state`) into sorted
+/// order; arrays recomputed each step are left alone.
 fn reorder<R: Real>(p: &mut Particles<R>, order: View<u32>, live: usize) {
-    fn permute<T: Copy + Send + Sync>(
-        field: &mut ParticleArray<T>,
-        scratch: &mut ParticleArray<T>,
-        order: View<u32>,
-        live: usize,
-    ) {
+    let density_rate = p.density_is_state();
+    let mut permute =
+        Permute { order, live, density_rate, wide: &mut p.scratch_f64, real: &mut p.scratch_real, index: &mut p.scratch_u32 };
+    crate::visit_carried!(mut &mut permute; p);
+    p.set_len(live);
+}
+
+/// Gathers each carried array into sorted order through a scratch array of its type, then
+/// swaps the two.
+struct Permute<'s, R> {
+    order: View<'s, u32>,
+    live: usize,
+    density_rate: bool,
+    wide: &'s mut ParticleArray<f64>,
+    real: &'s mut ParticleArray<R>,
+    index: &'s mut ParticleArray<u32>,
+}
+
+fn permute<T: Copy + Send + Sync>(
+    fields: &mut [ParticleArray<T>],
+    scratch: &mut ParticleArray<T>,
+    order: View<u32>,
+    live: usize,
+) {
+    for field in fields {
         let unsorted = View::new(&field[..]);
         let sorted = view_mut(scratch, live);
         launch(live, |k| gather(k, order, unsorted, sorted));
         std::mem::swap(field, scratch);
     }
-    for a in 0..3 {
-        permute(&mut p.position[a], &mut p.scratch_f64, order, live);
-        permute(&mut p.velocity[a], &mut p.scratch_real, order, live);
-        permute(&mut p.velocity_half[a], &mut p.scratch_real, order, live);
-    }
-    permute(&mut p.id, &mut p.scratch_u32, order, live);
-    if p.density_is_state() {
-        permute(&mut p.density, &mut p.scratch_real, order, live);
-    }
-    if let Some(implicit) = &mut p.implicit {
-        for a in 0..3 {
-            permute(&mut implicit.viscous_change[a], &mut p.scratch_real, order, live);
+}
+
+impl<'a, R: Real> VisitCarried<&'a mut [ParticleArray<f64>], &'a mut [ParticleArray<R>], &'a mut [ParticleArray<u32>]>
+    for Permute<'_, R>
+{
+    fn wide(&mut self, array: Carried, components: &'a mut [ParticleArray<f64>]) {
+        if array.is_state(self.density_rate) {
+            permute(components, self.wide, self.order, self.live);
         }
     }
-    if let Some(pressure) = &mut p.pressure_solve {
-        for sum in &mut pressure.stiffness_sums {
-            permute(sum, &mut p.scratch_real, order, live);
+    fn real(&mut self, array: Carried, components: &'a mut [ParticleArray<R>]) {
+        if array.is_state(self.density_rate) {
+            permute(components, self.real, self.order, self.live);
         }
     }
-    p.set_len(live);
+    fn index(&mut self, array: Carried, components: &'a mut [ParticleArray<u32>]) {
+        if array.is_state(self.density_rate) {
+            permute(components, self.index, self.order, self.live);
+        }
+    }
 }

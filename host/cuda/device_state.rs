@@ -51,14 +51,11 @@ pub(super) struct DeviceState<R> {
     pub(super) near_fluid: DeviceArray<u8>,
     /// The live particle count (one entry).
     pub(super) count: DeviceArray<u32>,
-    /// Inlet layers of this step, before they are appended.
-    pub(super) staged_position: DeviceVec3<f64>,
-    pub(super) staged_velocity: DeviceVec3<R>,
-    pub(super) staged_id: DeviceArray<u32>,
-    /// The layers' density, where density comes from the continuity equation.
-    pub(super) staged_density: Option<DeviceArray<R>>,
-    /// Zeros for the layers' viscous change, where viscosity is solved implicitly.
-    pub(super) staged_zeros: Option<DeviceArray<R>>,
+    /// One carried array of this step's inlet layers at a time, by element type, before it is
+    /// appended.
+    pub(super) staged_wide: DeviceArray<f64>,
+    pub(super) staged_real: DeviceArray<R>,
+    pub(super) staged_index: DeviceArray<u32>,
     /// One `StateFigures` per diagnostics range.
     pub(super) figures: DeviceArray<StateFigures>,
     /// Wall particles' mirror images by id, under mirrored walls.
@@ -213,15 +210,9 @@ impl<R: Real> DeviceState<R> {
             holds_fluid: if tracks_fluid { Some(DeviceArray::zeros(gpu, buckets - 1, "cells holding fluid")?) } else { None },
             near_fluid: DeviceArray::zeros(gpu, buckets - 1, "cells near fluid")?,
             count: DeviceArray::zeros(gpu, 1, "particle count")?,
-            staged_position: vec3_zeros(gpu, staged, "inlet layers")?,
-            staged_velocity: vec3_zeros(gpu, staged, "inlet layers")?,
-            staged_id: DeviceArray::zeros(gpu, staged, "inlet layers")?,
-            staged_density: if fields.density_rate { Some(DeviceArray::zeros(gpu, staged, "inlet layers")?) } else { None },
-            staged_zeros: if fields.implicit || fields.pressure_solve {
-                Some(DeviceArray::zeros(gpu, staged, "inlet layers")?)
-            } else {
-                None
-            },
+            staged_wide: DeviceArray::zeros(gpu, staged, "inlet layers")?,
+            staged_real: DeviceArray::zeros(gpu, staged, "inlet layers")?,
+            staged_index: DeviceArray::zeros(gpu, staged, "inlet layers")?,
             figures: DeviceArray::zeros(gpu, capacity.div_ceil(DIAGNOSTICS_RANGE), "diagnostics")?,
             wall_mirror: None,
             implicit: if fields.implicit { Some(DeviceImplicit::new(gpu, capacity)?) } else { None },
@@ -254,11 +245,9 @@ impl<R: Real> DeviceState<R> {
             + self.holds_fluid.as_ref().map_or(0, DeviceArray::bytes)
             + self.near_fluid.bytes()
             + self.count.bytes()
-            + v3(&self.staged_position)
-            + r3(&self.staged_velocity)
-            + self.staged_id.bytes()
-            + self.staged_density.as_ref().map_or(0, DeviceArray::bytes)
-            + self.staged_zeros.as_ref().map_or(0, DeviceArray::bytes)
+            + self.staged_wide.bytes()
+            + self.staged_real.bytes()
+            + self.staged_index.bytes()
             + self.figures.bytes()
             + self.wall_mirror.as_ref().map_or(0, v3)
             + self.implicit.as_ref().map_or(0, DeviceImplicit::bytes)

@@ -7,7 +7,8 @@
 //! for an upper bound (`bound`). Every `check_every` steps, and before every frame, the host
 //! reads the diagnostics (largest speed, compression, runaway particles) and the count.
 
-use super::device_array::{vec3_view, vec3_view_mut, vec3_zeros, DeviceArray};
+use super::device_array::{vec3_view, vec3_view_mut, vec3_zeros};
+use super::device_carried::{append_carried, copy_carried, reorder_carried, Transfer};
 use super::device_state::{buckets_chunks, DeviceState, DIAGNOSTICS_RANGE};
 use super::gpu::{ByValue, CudaError, Gpu};
 use super::gpu_passes::{kernel, GpuPasses};
@@ -18,7 +19,7 @@ use crate::simulation::model::Model;
 use crate::simulation::particles::{ModelFields, Particles};
 use crate::simulation::{Setup, Simulation, StepError};
 use coil_kernels::cell_grid::{HashArgs, Neighborhood};
-use coil_kernels::counting_sort::{Gathered, ReorderArgs, DEVICE_SCAN_CHUNK};
+use coil_kernels::counting_sort::DEVICE_SCAN_CHUNK;
 use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
 use coil_kernels::fluid::Fluid;
 use coil_kernels::fluid_cells::{HoldsFluidArgs, NearFluidArgs};
@@ -97,7 +98,7 @@ impl<R: Real> CudaBackend<R> {
         }
         let mut backend = Self {
             bound: host.particles.len(),
-            staged: Particles::with_capacity(staged, ModelFields::default()),
+            staged: Particles::with_capacity(staged, fields),
             figures: vec![StateFigures::default(); device.figures.len()],
             partial_dots: vec![[0.0; 2]; device.implicit.as_ref().map_or(0, |i| i.partial_dots.len())],
             partial_sums: vec![[0.0; 2]; device.pressure_solve.as_ref().map_or(0, |p| p.partial_sums.len())],
@@ -122,26 +123,9 @@ impl<R: Real> CudaBackend<R> {
 
     /// Copies the host's particles and grid to the device.
     fn upload(&mut self) -> Result<(), CudaError> {
-        let p = &self.mirror.particles;
-        let n = p.len();
+        let n = self.mirror.particles.len();
         let (gpu, d) = (&self.gpu, &mut self.device);
-        for a in 0..3 {
-            d.position[a].upload(gpu, &p.position[a][..n])?;
-            d.velocity[a].upload(gpu, &p.velocity[a][..n])?;
-            d.velocity_half[a].upload(gpu, &p.velocity_half[a][..n])?;
-        }
-        d.id.upload(gpu, &p.id[..n])?;
-        d.density.upload(gpu, &p.density[..n])?;
-        if let (Some(device), Some(host)) = (&mut d.implicit, &p.implicit) {
-            for a in 0..3 {
-                device.viscous_change[a].upload(gpu, &host.viscous_change[a][..n])?;
-            }
-        }
-        if let (Some(device), Some(host)) = (&mut d.pressure_solve, &p.pressure_solve) {
-            for (device, host) in device.stiffness_sums.iter_mut().zip(&host.stiffness_sums) {
-                device.upload(gpu, &host[..n])?;
-            }
-        }
+        copy_carried(gpu, d, &mut self.mirror.particles, n, Transfer::Upload)?;
         d.cell_start.upload(gpu, self.mirror.grid.cell_start())?;
         d.near_fluid.upload(gpu, self.mirror.grid.near_fluid())?;
         d.count.upload(gpu, &[n as u32])?;
@@ -195,60 +179,7 @@ impl<R: Real> CudaBackend<R> {
             gpu.launch("sort_buckets", cells, &[&ByValue(cells), &starts, &ByValue(d.order.view_mut(n))])?;
             gpu.launch("set_count", 1, &[&ByValue(d.count.view_mut(1)), &starts, &ByValue(cells)])?;
         }
-        let order = d.order.view(n);
-        let capacity = d.id.len();
-        let reorder = kernel::<R>("reorder", "", "");
-        // SAFETY: reorder_<R>(count, args), every array gathered of the capacity's length into
-        // a scratch array of its type, `count` now the live count.
-        unsafe {
-            for a in 0..3 {
-                let [first, second] = &d.scratch_real;
-                let args = ReorderArgs {
-                    order,
-                    wide: Gathered::new(d.position[a].view(capacity), d.scratch_f64.view_mut(n)),
-                    first: Gathered::new(d.velocity[a].view(capacity), first.view_mut(n)),
-                    second: Gathered::new(d.velocity_half[a].view(capacity), second.view_mut(n)),
-                    index: if a == 0 { Gathered::new(d.id.view(capacity), d.scratch_u32.view_mut(n)) } else { Gathered::none() },
-                };
-                gpu.launch(reorder, threads, &[&count, &ByValue(args)])?;
-                std::mem::swap(&mut d.position[a], &mut d.scratch_f64);
-                d.scratch_f64.poison(gpu);
-                for (field, scratch) in [&mut d.velocity[a], &mut d.velocity_half[a]].into_iter().zip(&mut d.scratch_real) {
-                    std::mem::swap(field, scratch);
-                    scratch.poison(gpu);
-                }
-                if a == 0 {
-                    std::mem::swap(&mut d.id, &mut d.scratch_u32);
-                    d.scratch_u32.poison(gpu);
-                }
-            }
-            // The state only some runs carry, two arrays a launch.
-            let mut carried: Vec<&mut DeviceArray<R>> = Vec::new();
-            if d.density_rate.is_some() {
-                carried.push(&mut d.density);
-            }
-            carried.extend(d.implicit.as_mut().map(|i| &mut i.viscous_change[..]).unwrap_or_default());
-            carried.extend(d.pressure_solve.as_mut().map(|p| &mut p.stiffness_sums[..]).unwrap_or_default());
-            for pair in carried.chunks_mut(2) {
-                let [first, second] = &d.scratch_real;
-                let gathered = |k: usize, scratch: &DeviceArray<R>| {
-                    pair.get(k).map_or(Gathered::none(), |field| Gathered::new(field.view(capacity), scratch.view_mut(n)))
-                };
-                let args = ReorderArgs {
-                    order,
-                    wide: Gathered::none(),
-                    first: gathered(0, first),
-                    second: gathered(1, second),
-                    index: Gathered::none(),
-                };
-                gpu.launch(reorder, threads, &[&count, &ByValue(args)])?;
-                for (field, scratch) in pair.iter_mut().zip(&mut d.scratch_real) {
-                    std::mem::swap(*field, scratch);
-                    scratch.poison(gpu);
-                }
-            }
-        }
-        Ok(())
+        reorder_carried(gpu, d, d.order.view(n), n)
     }
 
     /// The `fluid_cells` passes over the sorted particles, when the run tracks fluid (else the
@@ -301,53 +232,11 @@ impl<R: Real> Backend<R> for CudaBackend<R> {
         if added == 0 {
             return Ok(());
         }
-        let (gpu, d, s) = (&mut self.gpu, &mut self.device, &self.staged);
-        let count = ByValue(d.count.view(1));
-        let k = ByValue(added as u32);
-        for a in 0..3 {
-            d.staged_position[a].upload(gpu, &s.position[a][..added])?;
-            d.staged_velocity[a].upload(gpu, &s.velocity[a][..added])?;
-        }
-        d.staged_id.upload(gpu, &s.id[..added])?;
-        if let Some(staged) = &mut d.staged_density {
-            staged.upload(gpu, &s.density[..added])?;
-        }
-        let capacity = d.id.len();
-        // SAFETY: append_<T>(count, added, staged, field) over arrays of the run's capacity,
-        // which the run's budget keeps the appended particles within.
+        let (gpu, d) = (&mut self.gpu, &mut self.device);
+        append_carried(gpu, d, &mut self.staged, added)?;
+        // SAFETY: grow_count(count, added) on the one-entry count.
         unsafe {
-            for a in 0..3 {
-                let staged_x = ByValue(d.staged_position[a].view(added));
-                gpu.launch("append_f64", added as u32, &[&count, &k, &staged_x, &ByValue(d.position[a].view_mut(capacity))])?;
-                let staged_v = ByValue(d.staged_velocity[a].view(added));
-                for target in [&d.velocity[a], &d.velocity_half[a]] {
-                    gpu.launch(
-                        kernel::<R>("append", "", ""),
-                        added as u32,
-                        &[&count, &k, &staged_v, &ByValue(target.view_mut(capacity))],
-                    )?;
-                }
-            }
-            let staged_id = ByValue(d.staged_id.view(added));
-            gpu.launch("append_u32", added as u32, &[&count, &k, &staged_id, &ByValue(d.id.view_mut(capacity))])?;
-            if let Some(staged) = &d.staged_density {
-                let target = ByValue(d.density.view_mut(capacity));
-                gpu.launch(kernel::<R>("append", "", ""), added as u32, &[&count, &k, &ByValue(staged.view(added)), &target])?;
-            }
-            // New particles start the implicit solve from v* alone, and the pressure solves
-            // from no stiffness.
-            if let Some(zeros) = &d.staged_zeros {
-                let viscous_change = d.implicit.as_ref().map(|i| &i.viscous_change[..]).unwrap_or_default();
-                let pressure_sums = d.pressure_solve.as_ref().map(|p| &p.stiffness_sums[..]).unwrap_or_default();
-                for target in viscous_change.iter().chain(pressure_sums) {
-                    gpu.launch(
-                        kernel::<R>("append", "", ""),
-                        added as u32,
-                        &[&count, &k, &ByValue(zeros.view(added)), &ByValue(target.view_mut(capacity))],
-                    )?;
-                }
-            }
-            gpu.launch("grow_count", 1, &[&ByValue(d.count.view_mut(1)), &k])?;
+            gpu.launch("grow_count", 1, &[&ByValue(d.count.view_mut(1)), &ByValue(added as u32)])?;
         }
         self.bound += added;
         Ok(())
@@ -440,26 +329,12 @@ impl<R: Real> Backend<R> for CudaBackend<R> {
     /// Copies the particles in sorted order and the grid to the host (for frames).
     fn download(&mut self) -> Result<(), CudaError> {
         let n = self.bound;
-        let (gpu, d) = (&self.gpu, &self.device);
+        let (gpu, d) = (&self.gpu, &mut self.device);
         let p = &mut self.mirror.particles;
         p.set_len(n);
+        copy_carried(gpu, d, p, n, Transfer::Download)?;
         for a in 0..3 {
-            d.position[a].download(gpu, &mut p.position[a][..n])?;
-            d.velocity[a].download(gpu, &mut p.velocity[a][..n])?;
-            d.velocity_half[a].download(gpu, &mut p.velocity_half[a][..n])?;
             d.acceleration[a].download(gpu, &mut p.acceleration[a][..n])?;
-        }
-        d.id.download(gpu, &mut p.id[..n])?;
-        d.density.download(gpu, &mut p.density[..n])?;
-        if let (Some(device), Some(host)) = (&d.implicit, &mut p.implicit) {
-            for a in 0..3 {
-                device.viscous_change[a].download(gpu, &mut host.viscous_change[a][..n])?;
-            }
-        }
-        if let (Some(device), Some(host)) = (&d.pressure_solve, &mut p.pressure_solve) {
-            for (device, host) in device.stiffness_sums.iter().zip(&mut host.stiffness_sums) {
-                device.download(gpu, &mut host[..n])?;
-            }
         }
         d.cell_start.download(gpu, self.mirror.grid.cell_start_mut())?;
         d.near_fluid.download(gpu, self.mirror.grid.near_fluid_mut())?;

@@ -5,6 +5,8 @@
 #[cfg(feature = "cuda")]
 pub mod device_array;
 #[cfg(feature = "cuda")]
+mod device_carried;
+#[cfg(feature = "cuda")]
 mod device_state;
 #[cfg(feature = "cuda")]
 mod emulator;

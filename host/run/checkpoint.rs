@@ -2,13 +2,11 @@
 //! (or where Ctrl-C stopped it), from which `coil resume` continues bit for bit as if the run
 //! had never stopped.
 //!
-//! Only what a step reads from the step before is kept: positions, velocities at the full and
-//! the half step, ids and densities of the live particles in their current order (the next
-//! sort is stable in that order), where viscosity is solved implicitly the last step's viscous
-//! change of velocity (the next solve's first guess), the clock and dt of the last step, the diagnostics the next
-//! dt reads, each inlet's progress, and the frame schedule and running figures of the summary
-//! (the solvers' iterations among them).
-//! Everything else (walls' mirror images, the grid, stresses, accelerations) is rebuilt from
+//! Only what a step reads from the step before is kept: the carried arrays of the live
+//! particles in their current order (`simulation::carried_state`, whose list gives their order
+//! here; the next sort is stable in that order), the clock and dt of the last step, the
+//! diagnostics the next dt reads, each inlet's progress, and the frame schedule and running
+//! figures of the summary (the solvers' iterations among them). Everything else (walls' mirror images, the grid, stresses, accelerations) is rebuilt from
 //! the scene or recomputed by the next step.
 //!
 //! Layout, little-endian: magic, format version, bytes of a real (4 or 8), the scene's
@@ -19,12 +17,15 @@ use super::fields::fingerprint;
 use super::summary::{Tally, WrittenFile};
 use crate::fnv1a::fnv1a;
 use crate::scene::Scene;
+use crate::simulation::carried_state::{Carried, VisitCarried};
 use crate::simulation::model::Model;
+use crate::simulation::particle_array::ParticleArray;
 use crate::simulation::particles::Particles;
 use crate::simulation::run_state::SolveStatistics;
 use crate::simulation::{Diagnostics, RunState, Setup};
 use crate::time_step::Limit;
 use coil_kernels::Real;
+use std::marker::PhantomData;
 use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"COILCKPT";
@@ -150,12 +151,8 @@ pub struct Checkpoint {
     pub tally: Tally,
     /// Live particles, boundary included.
     pub particles: usize,
-    /// Where the particle arrays start in `bytes`.
-    particle_data: usize,
-    /// Whether the implicit solve's viscous change follows the densities.
-    viscous_change: bool,
-    /// Whether the pressure solves' stiffness sums follow.
-    stiffness_sums: bool,
+    /// Where the particle arrays start and end in `bytes`.
+    particle_data: std::ops::Range<usize>,
     /// The implicit viscosity, divergence and density solves of the run so far (none counted
     /// in a checkpoint before version 6).
     solves: [SolveStatistics; 3],
@@ -208,31 +205,7 @@ pub fn encode<R: Real, M: Model<R>>(sim: &RunState<R, M>, p: &Particles<R>, scen
     w.f64(tally.max_speed);
     w.f64(tally.wall_s);
     w.u64(n as u64);
-    for a in 0..3 {
-        w.f64s(&p.position[a][..n]);
-    }
-    for a in 0..3 {
-        w.reals(&p.velocity[a][..n]);
-    }
-    for a in 0..3 {
-        w.reals(&p.velocity_half[a][..n]);
-    }
-    for &id in &p.id[..n] {
-        w.u32(id);
-    }
-    w.reals(&p.density[..n]);
-    w.u8(u8::from(p.implicit.is_some()));
-    if let Some(implicit) = &p.implicit {
-        for a in 0..3 {
-            w.reals(&implicit.viscous_change[a][..n]);
-        }
-    }
-    w.u8(u8::from(p.pressure_solve.is_some()));
-    if let Some(pressure) = &p.pressure_solve {
-        for sum in &pressure.stiffness_sums {
-            w.reals(&sum[..n]);
-        }
-    }
+    crate::visit_carried!(ref &mut WriteCarried::<R> { w: &mut w, n, real: PhantomData }; p);
     for solves in [&sim.solves, &sim.divergence_solves, &sim.density_solves] {
         w.u64(solves.steps);
         w.u64(solves.iterations);
@@ -321,18 +294,13 @@ impl Checkpoint {
             max_speed: r.f64("the summary's figures")?,
             wall_s: r.f64("the summary's figures")?,
         };
-        let per_particle = 24 + 7 * real_bytes + 4;
-        let particles = r.count(per_particle, "particles")?;
-        let particle_data = r.at;
-        r.take(particles * per_particle, "the particles")?;
-        let viscous_change = version >= 4 && r.u8("the implicit solve's flag")? == 1;
-        if viscous_change {
-            r.take(particles * 3 * real_bytes, "the implicit solve's viscous change")?;
-        }
-        let stiffness_sums = version >= 5 && r.u8("the pressure solves' flag")? == 1;
-        if stiffness_sums {
-            r.take(particles * 2 * real_bytes, "the pressure solves' stiffness sums")?;
-        }
+        let particles = r.count(1, "particles")?;
+        // The solves' iterations close the file, so the carried arrays (`carried_state`), which
+        // `restore` reads, lie between.
+        let solves_bytes = if version >= 6 { 3 * (8 + 8 + 4 + 8) } else { 0 };
+        let end = body.len().checked_sub(solves_bytes).filter(|&e| e >= r.at).ok_or("ends inside the solves' iterations")?;
+        let particle_data = r.at..end;
+        r.at = end;
         let mut solves = [SolveStatistics::default(); 3];
         if version >= 6 {
             for s in &mut solves {
@@ -341,9 +309,6 @@ impl Checkpoint {
                 s.largest_iterations = r.u32("the solves' iterations")?;
                 s.unconverged = r.u64("the solves' iterations")?;
             }
-        }
-        if r.at != body.len() {
-            return Err(format!("has {} bytes past its particles", body.len() - r.at));
         }
         Ok(Self {
             real_bytes,
@@ -363,8 +328,6 @@ impl Checkpoint {
             tally,
             particles,
             particle_data,
-            viscous_change,
-            stiffness_sums,
             solves,
             version,
             bytes,
@@ -391,68 +354,20 @@ impl Checkpoint {
             return Err(format!("holds {} inlets where the scene has {}", self.inlets.len(), sim.inlets().len()));
         }
         let n = self.particles;
-        let mut at = self.particle_data;
-        let mut next = |width: usize| {
-            let chunk = &self.bytes[at..at + width];
-            at += width;
-            chunk
-        };
-        let real = |b: &[u8]| match b.len() {
-            4 => R::from_f64(f32::from_le_bytes(b.try_into().expect("4 bytes")) as f64),
-            _ => R::from_f64(f64::from_le_bytes(b.try_into().expect("8 bytes"))),
-        };
         p.set_len(n);
-        for a in 0..3 {
-            for (x, b) in p.position[a][..n].iter_mut().zip(next(8 * n).chunks_exact(8)) {
-                *x = f64::from_le_bytes(b.try_into().expect("8 bytes"));
-            }
-        }
-        let rb = self.real_bytes;
-        for a in 0..3 {
-            for (v, b) in p.velocity[a][..n].iter_mut().zip(next(rb * n).chunks_exact(rb)) {
-                *v = real(b);
-            }
-        }
-        for a in 0..3 {
-            for (v, b) in p.velocity_half[a][..n].iter_mut().zip(next(rb * n).chunks_exact(rb)) {
-                *v = real(b);
-            }
-        }
-        for (id, b) in p.id[..n].iter_mut().zip(next(4 * n).chunks_exact(4)) {
-            *id = u32::from_le_bytes(b.try_into().expect("4 bytes"));
-        }
-        for (d, b) in p.density[..n].iter_mut().zip(next(rb * n).chunks_exact(rb)) {
-            *d = real(b);
-        }
-        if self.version >= 4 {
-            next(1);
-        }
-        match (&mut p.implicit, self.viscous_change) {
-            (Some(implicit), true) => {
-                for a in 0..3 {
-                    for (v, b) in implicit.viscous_change[a][..n].iter_mut().zip(next(rb * n).chunks_exact(rb)) {
-                        *v = real(b);
-                    }
-                }
-            }
-            (None, false) => {}
-            (Some(_), false) => return Err("has no implicit viscosity state, and the scene solves viscosity implicitly".into()),
-            (None, true) => return Err("holds implicit viscosity state, and the scene solves viscosity explicitly".into()),
-        }
-        if self.version >= 5 {
-            next(1);
-        }
-        match (&mut p.pressure_solve, self.stiffness_sums) {
-            (Some(pressure), true) => {
-                for sum in &mut pressure.stiffness_sums {
-                    for (v, b) in sum[..n].iter_mut().zip(next(rb * n).chunks_exact(rb)) {
-                        *v = real(b);
-                    }
-                }
-            }
-            (None, false) => {}
-            (Some(_), false) => return Err("has no pressure solve state, and the scene solves pressure".into()),
-            (None, true) => return Err("holds pressure solve state, and the scene does not solve pressure".into()),
+        let bytes = &self.bytes[..self.particle_data.end];
+        let mut read = ReadCarried::<R> {
+            r: Reader { bytes, at: self.particle_data.start },
+            n,
+            real_bytes: self.real_bytes,
+            version: self.version,
+            result: Ok(()),
+            real: PhantomData,
+        };
+        crate::visit_carried!(mut &mut read; p);
+        read.result?;
+        if read.r.at != bytes.len() {
+            return Err(format!("has {} bytes past its particles", bytes.len() - read.r.at));
         }
         if p.id[..n].iter().any(|&id| id >= self.next_id) {
             return Err(format!("holds a particle id at or above its next id {}", self.next_id));
@@ -465,5 +380,106 @@ impl Checkpoint {
         sim.diagnostics = self.diagnostics;
         [sim.solves, sim.divergence_solves, sim.density_solves] = self.solves;
         Ok(())
+    }
+}
+
+/// Writes the first `n` particles of each carried array, an optional array after a flag that
+/// says whether the run holds it.
+struct WriteCarried<'w, R> {
+    w: &'w mut Writer,
+    n: usize,
+    real: PhantomData<R>,
+}
+
+impl<'a, R: Real> VisitCarried<&'a [ParticleArray<f64>], &'a [ParticleArray<R>], &'a [ParticleArray<u32>]>
+    for WriteCarried<'_, R>
+{
+    fn wide(&mut self, _: Carried, components: &'a [ParticleArray<f64>]) {
+        for c in components {
+            self.w.f64s(&c[..self.n]);
+        }
+    }
+    fn real(&mut self, _: Carried, components: &'a [ParticleArray<R>]) {
+        for c in components {
+            self.w.reals(&c[..self.n]);
+        }
+    }
+    fn index(&mut self, _: Carried, components: &'a [ParticleArray<u32>]) {
+        for c in components {
+            for &id in &c[..self.n] {
+                self.w.u32(id);
+            }
+        }
+    }
+    fn real_where(&mut self, array: Carried, components: Option<&'a [ParticleArray<R>]>) {
+        self.w.u8(u8::from(components.is_some()));
+        if let Some(components) = components {
+            self.real(array, components);
+        }
+    }
+}
+
+/// Reads each carried array back as [`WriteCarried`] wrote it in format `version`: an optional
+/// array the version did not keep is absent. The first error stops the reading.
+struct ReadCarried<'b, R> {
+    r: Reader<'b>,
+    n: usize,
+    real_bytes: usize,
+    version: u32,
+    result: Result<(), String>,
+    real: PhantomData<R>,
+}
+
+impl<R> ReadCarried<'_, R> {
+    /// Each component's `n` entries of `width` bytes, decoded by `from`.
+    fn read<T>(&mut self, what: &str, components: &mut [ParticleArray<T>], width: usize, from: impl Fn(&[u8]) -> T) {
+        for c in components {
+            if self.result.is_err() {
+                return;
+            }
+            match self.r.take(self.n * width, what) {
+                Ok(bytes) => {
+                    for (v, b) in c[..self.n].iter_mut().zip(bytes.chunks_exact(width)) {
+                        *v = from(b);
+                    }
+                }
+                Err(e) => self.result = Err(e),
+            }
+        }
+    }
+}
+
+impl<'a, R: Real> VisitCarried<&'a mut [ParticleArray<f64>], &'a mut [ParticleArray<R>], &'a mut [ParticleArray<u32>]>
+    for ReadCarried<'_, R>
+{
+    fn wide(&mut self, array: Carried, components: &'a mut [ParticleArray<f64>]) {
+        self.read(array.what, components, 8, |b| f64::from_le_bytes(b.try_into().expect("8 bytes")));
+    }
+    fn real(&mut self, array: Carried, components: &'a mut [ParticleArray<R>]) {
+        let real = |b: &[u8]| match b.len() {
+            4 => R::from_f64(f32::from_le_bytes(b.try_into().expect("4 bytes")) as f64),
+            _ => R::from_f64(f64::from_le_bytes(b.try_into().expect("8 bytes"))),
+        };
+        self.read(array.what, components, self.real_bytes, real);
+    }
+    fn index(&mut self, array: Carried, components: &'a mut [ParticleArray<u32>]) {
+        self.read(array.what, components, 4, |b| u32::from_le_bytes(b.try_into().expect("4 bytes")));
+    }
+    fn real_where(&mut self, array: Carried, components: Option<&'a mut [ParticleArray<R>]>) {
+        if self.result.is_err() {
+            return;
+        }
+        // A version before the array's kept none, and has no flag for it.
+        let held = match self.version >= array.since {
+            true => self.r.u8(array.what).map(|flag| flag == 1),
+            false => Ok(false),
+        };
+        match (components, held) {
+            (_, Err(e)) => self.result = Err(e),
+            (Some(components), Ok(true)) => self.real(array, components),
+            (None, Ok(false)) => {}
+            (Some(_), Ok(false)) => self.result = Err(format!("holds none of {}, which the scene's run carries", array.what)),
+            (None, Ok(true)) => self.result = Err(format!("holds {}, which the scene's run does not carry", array.what)),
+        }
     }
 }

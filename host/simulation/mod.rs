@@ -2,6 +2,7 @@
 //! through Algorithm 1 by one schedule that every backend runs.
 
 pub mod backend;
+pub mod carried_state;
 pub mod dfsph_bender2017;
 pub mod host_particles;
 pub mod implicit_weiler2018;

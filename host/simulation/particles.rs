@@ -1,9 +1,11 @@
 //! Structure-of-arrays particle storage, allocated once to the run's capacity.
 
+use std::marker::PhantomData;
 use std::ops::{Deref, DerefMut};
 
 use crate::scene::Pressure;
 use crate::scene::{DensityEquation, Scene};
+use crate::simulation::carried_state::{Carried, Start, VisitCarried};
 use crate::simulation::particle_array::ParticleArray;
 use coil_kernels::dfsph_bender2017::ERROR_RANGE;
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
@@ -236,27 +238,17 @@ impl<R: Real> Particles<R> {
         self.len = len;
     }
 
-    /// Appends a particle; its density is the density pass's to set, or, where density comes
-    /// from the continuity equation, the caller's. The caller keeps within capacity (budgets
-    /// are checked before injection).
+    /// Appends a particle; its carried arrays start as `carried_state::Start` says (its
+    /// density is the density pass's to set, or, where density comes from the continuity
+    /// equation, the caller's). The caller keeps within capacity (budgets are checked before
+    /// injection).
     pub fn push(&mut self, id: u32, position: [f64; 3], velocity: [f64; 3]) {
         assert!(self.len < self.capacity, "particle capacity {} exceeded", self.capacity);
         let i = self.len;
         for a in 0..3 {
-            self.position[a][i] = position[a];
-            self.velocity[a][i] = R::from_f64(velocity[a]);
-            self.velocity_half[a][i] = R::from_f64(velocity[a]);
             self.acceleration[a][i] = R::ZERO;
-            if let Some(implicit) = &mut self.implicit {
-                implicit.viscous_change[a][i] = R::ZERO;
-            }
         }
-        if let Some(pressure) = &mut self.pressure_solve {
-            for sum in &mut pressure.stiffness_sums {
-                sum[i] = R::ZERO;
-            }
-        }
-        self.id[i] = id;
+        crate::visit_carried!(mut &mut NewParticle::<R> { i, id, position, velocity, real: PhantomData }; self);
         self.len += 1;
     }
 
@@ -325,6 +317,51 @@ impl<R: Real> Particles<R> {
 
     pub fn id_view(&self) -> View<'_, u32> {
         View::new(&self.id[..self.len])
+    }
+}
+
+/// Writes a new particle's entry `i` of every carried array.
+struct NewParticle<R> {
+    i: usize,
+    id: u32,
+    position: [f64; 3],
+    velocity: [f64; 3],
+    real: PhantomData<R>,
+}
+
+impl<R> NewParticle<R> {
+    /// Component `a` of an array that starts as `start`; `None` where the inlet sets it. Every
+    /// start is exact in f64 (ids are below 2^32).
+    fn value(&self, start: Start, a: usize) -> Option<f64> {
+        match start {
+            Start::Position => Some(self.position[a]),
+            Start::Velocity => Some(self.velocity[a]),
+            Start::Id => Some(f64::from(self.id)),
+            Start::Zero => Some(0.0),
+            Start::Inlet => None,
+        }
+    }
+
+    fn write<T>(&self, start: Start, components: &mut [ParticleArray<T>], from: impl Fn(f64) -> T) {
+        for (a, c) in components.iter_mut().enumerate() {
+            if let Some(v) = self.value(start, a) {
+                c[self.i] = from(v);
+            }
+        }
+    }
+}
+
+impl<'a, R: Real> VisitCarried<&'a mut [ParticleArray<f64>], &'a mut [ParticleArray<R>], &'a mut [ParticleArray<u32>]>
+    for NewParticle<R>
+{
+    fn wide(&mut self, array: Carried, components: &'a mut [ParticleArray<f64>]) {
+        self.write(array.start, components, |v| v);
+    }
+    fn real(&mut self, array: Carried, components: &'a mut [ParticleArray<R>]) {
+        self.write(array.start, components, R::from_f64);
+    }
+    fn index(&mut self, array: Carried, components: &'a mut [ParticleArray<u32>]) {
+        self.write(array.start, components, |v| v as u32);
     }
 }
 

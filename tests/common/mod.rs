@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod carried;
+
 use coil::scene::overrides::Override;
 use coil::scene::Scene;
 use std::process::{Command, Output};

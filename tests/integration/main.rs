@@ -5,6 +5,7 @@
 mod common;
 
 mod bench;
+mod carried_state;
 mod hostile_input;
 mod inlet_and_time_step;
 mod kernels;
