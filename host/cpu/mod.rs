@@ -11,41 +11,15 @@ use crate::simulation::backend::{Backend, ParticleViews, Passes, Readout, Schedu
 use crate::simulation::host_particles::HostParticles;
 use crate::simulation::particle_array::ParticleArray;
 use crate::simulation::particles::{mat3_view_mut, stress_view_mut, vec3_view, vec3_view_mut, view_mut, Particles};
+use crate::simulation::pass_table::pass_table;
 use crate::simulation::sorted_grid::SortedGrid;
-use coil_kernels::acceleration::{acceleration_pass, AccelerationArgs};
 use coil_kernels::cell_grid::Neighbors;
-use coil_kernels::continuity_molteni2009::{continuity_pass, density_integration_pass, ContinuityArgs, DensityIntegrationArgs};
-use coil_kernels::cross_viscosity::Rheology;
-use coil_kernels::density::{continuity_floor_pass, density_pass, DensityArgs, DensityKernel, Spiky};
-use coil_kernels::dfsph_bender2017::{
-    density_error_pass, density_rate_pass, divergence_error_pass, error_sum_pass, factor_pass, pressure_change_pass,
-    warm_start_pass, DensityErrorArgs, DensityRateArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs,
-    WarmStartArgs, ERROR_RANGE,
-};
 use coil_kernels::diagnostics::{range_figures, DiagnosticsArgs, StateFigures};
 use coil_kernels::fluid::Fluid;
-use coil_kernels::leapfrog::{leapfrog_pass, LeapfrogArgs};
-use coil_kernels::mirrored_wall::{mirrored_wall_pass, MirroredWallArgs};
 use coil_kernels::neighbor_list::NEIGHBOR_SLOTS;
-use coil_kernels::nozzle::{nozzle_pass, nozzle_shift_pass, NozzleArgs, NozzleShiftArgs};
-use coil_kernels::shifting_sun2017::{shift_pass, shifting_pass, ShiftArgs, ShiftingArgs};
 use coil_kernels::smoothing::SmoothingKernels;
 use coil_kernels::topology::{Open, Periodic, Topology};
-use coil_kernels::velocity_gradient::GradientEstimate;
 use coil_kernels::view::{Vec3View, View, ViewMut};
-use coil_kernels::viscosity::hourglass_ganzenmuller2015::{velocity_gradient_pass, VelocityGradientArgs};
-use coil_kernels::viscosity::implicit_weiler2018::{
-    cg_direction_pass, cg_start_pass, cg_step_pass, dot_pass, implicit_stress_pass, lagged_viscosity_pass, predictor_pass,
-    system_block_pass, system_product_pass, viscous_acceleration_pass, CgDirectionArgs, CgStartArgs, CgStepArgs, DotArgs,
-    ImplicitStressArgs, LaggedViscosityArgs, PredictorArgs, SystemBlockArgs, SystemProductArgs, ViscousAccelerationArgs,
-    DOT_RANGE,
-};
-use coil_kernels::viscosity::laplacian_morris1997::{
-    morris_system_block_pass, morris_system_product_pass, shear_viscosity_pass, MorrisSystemBlockArgs, MorrisSystemProductArgs,
-    ParticleViscosity, ShearViscosityArgs,
-};
-use coil_kernels::viscosity::stress_andrade2014::{stress_pass, StressArgs};
-use coil_kernels::viscosity::ViscousOperator;
 use coil_kernels::Real;
 use rayon::prelude::*;
 use std::convert::Infallible;
@@ -231,113 +205,27 @@ pub struct CpuPasses {
     pub n: usize,
 }
 
-impl<R: Real, T: Topology, N: Neighbors + Sync> Passes<R, T, N> for CpuPasses {
-    fn density<K: DensityKernel>(&mut self, args: DensityArgs<'_, R, N>) {
-        launch(self.n, |i| density_pass::<R, K, N>(i, &args));
-    }
-    fn continuity<K: DensityKernel>(&mut self, args: ContinuityArgs<'_, R, N>) {
-        launch(self.n, |i| continuity_pass::<R, K, N>(i, &args));
-    }
-    fn continuity_floor(&mut self, args: DensityArgs<'_, R, N>) {
-        launch(self.n, |i| continuity_floor_pass::<R, Spiky, N>(i, &args));
-    }
-    fn density_integration(&mut self, args: DensityIntegrationArgs<'_, R>) {
-        launch(self.n, |i| density_integration_pass(i, &args));
-    }
-    fn mirrored_wall(&mut self, args: MirroredWallArgs<'_, R, T>) {
-        launch(self.n, |i| mirrored_wall_pass(i, &args));
-    }
-    fn stress<Rh: Rheology<R>, G: GradientEstimate>(&mut self, args: StressArgs<'_, R, Rh, G, N>) {
-        launch(self.n, |i| stress_pass(i, &args));
-    }
-    fn shear_viscosity<Rh: Rheology<R>>(&mut self, args: ShearViscosityArgs<'_, R, Rh, N>) {
-        launch(self.n, |i| shear_viscosity_pass(i, &args));
-    }
-    fn velocity_gradient<Rh: Rheology<R>>(&mut self, args: VelocityGradientArgs<'_, R, Rh, N>) {
-        launch(self.n, |i| velocity_gradient_pass(i, &args));
-    }
-    fn acceleration<Op: ViscousOperator<R>>(&mut self, args: AccelerationArgs<'_, R, Op, N>) {
-        launch(self.n, |i| acceleration_pass(i, &args));
-    }
-    fn nozzle(&mut self, args: NozzleArgs<'_, R>) {
-        launch(self.n, |i| nozzle_pass(i, &args));
-    }
-    fn leapfrog(&mut self, args: LeapfrogArgs<'_, R, T>) {
-        launch(self.n, |i| leapfrog_pass(i, &args));
-    }
-    fn shifting(&mut self, args: ShiftingArgs<'_, R, N>) {
-        launch(self.n, |i| shifting_pass(i, &args));
-    }
-    fn nozzle_shift(&mut self, args: NozzleShiftArgs<'_, R>) {
-        launch(self.n, |i| nozzle_shift_pass(i, &args));
-    }
-    fn shift(&mut self, args: ShiftArgs<'_, R, T>) {
-        launch(self.n, |i| shift_pass(i, &args));
-    }
-    fn predictor(&mut self, args: PredictorArgs<'_, R>) {
-        launch(self.n, |i| predictor_pass(i, &args));
-    }
-    fn lagged_viscosity<Rh: Rheology<R>>(&mut self, args: LaggedViscosityArgs<'_, R, Rh, N>) {
-        launch(self.n, |i| lagged_viscosity_pass(i, &args));
-    }
-    fn implicit_stress(&mut self, args: ImplicitStressArgs<'_, R, N>) {
-        launch(self.n, |i| implicit_stress_pass(i, &args));
-    }
-    fn system_block(&mut self, args: SystemBlockArgs<'_, R, N>) {
-        launch(self.n, |i| system_block_pass(i, &args));
-    }
-    fn system_product(&mut self, args: SystemProductArgs<'_, R, N>) {
-        launch(self.n, |i| system_product_pass(i, &args));
-    }
-    fn morris_system_block<Nu: ParticleViscosity<R>>(&mut self, args: MorrisSystemBlockArgs<'_, R, Nu, N>) {
-        launch(self.n, |i| morris_system_block_pass(i, &args));
-    }
-    fn morris_system_product<Nu: ParticleViscosity<R>>(&mut self, args: MorrisSystemProductArgs<'_, R, Nu, N>) {
-        launch(self.n, |i| morris_system_product_pass(i, &args));
-    }
-    fn cg_start(&mut self, args: CgStartArgs<'_, R>) {
-        launch(self.n, |i| cg_start_pass(i, &args));
-    }
-    fn cg_step(&mut self, args: CgStepArgs<'_, R>) {
-        launch(self.n, |i| cg_step_pass(i, &args));
-    }
-    fn cg_direction(&mut self, args: CgDirectionArgs<'_, R>) {
-        launch(self.n, |i| cg_direction_pass(i, &args));
-    }
-    fn viscous_acceleration(&mut self, args: ViscousAccelerationArgs<'_, R>) {
-        launch(self.n, |i| viscous_acceleration_pass(i, &args));
-    }
-    fn dots(&mut self, args: DotArgs<'_, R>, partial: ViewMut<'_, [f64; 2]>) -> [f64; 2] {
-        let n = self.n;
-        let ranges = n.div_ceil(DOT_RANGE);
-        (0..ranges).into_par_iter().for_each(|r| dot_pass(r, n, &args, partial));
-        sum_in_order(&partial.read(), ranges)
-    }
-    fn dfsph_factor(&mut self, args: FactorArgs<'_, R, N>) {
-        launch(self.n, |i| factor_pass(i, &args));
-    }
-    fn divergence_error(&mut self, args: DivergenceErrorArgs<'_, R, N>) {
-        launch(self.n, |i| divergence_error_pass(i, &args));
-    }
-    fn density_error(&mut self, args: DensityErrorArgs<'_, R, N>) {
-        launch(self.n, |i| density_error_pass(i, &args));
-    }
-    fn dfsph_density_rate(&mut self, args: DensityRateArgs<'_, R, N>) {
-        launch(self.n, |i| density_rate_pass(i, &args));
-    }
-    fn pressure_change(&mut self, args: PressureChangeArgs<'_, R, N>) {
-        launch(self.n, |i| pressure_change_pass(i, &args));
-    }
-    fn warm_start(&mut self, args: WarmStartArgs<'_, R>) {
-        launch(self.n, |i| warm_start_pass(i, &args));
-    }
-    fn error_sums(&mut self, args: ErrorSumArgs<'_, R>, partial: ViewMut<'_, [f64; 2]>) -> [f64; 2] {
-        let n = self.n;
-        let ranges = n.div_ceil(ERROR_RANGE);
-        (0..ranges).into_par_iter().for_each(|r| error_sum_pass(r, n, &args, partial));
-        sum_in_order(&partial.read(), ranges)
-    }
+/// The CPU's launcher of every row of `pass_table`.
+macro_rules! cpu_passes {
+    (
+        passes { $($(#[$doc:meta])* $name:ident $(<$($g:ident: $bound:path),+>)? ($args:ty) => $pass:expr, [$($part:expr),+];)* }
+        reductions { $($(#[$rdoc:meta])* $rname:ident ($rargs:ty) => $rpass:expr, $range:expr, $which:ident, [$($rpart:expr),+];)* }
+    ) => {
+        impl<R: Real, T: Topology, N: Neighbors + Sync> Passes<R, T, N> for CpuPasses {
+            $(fn $name $(<$($g: $bound),+>)? (&mut self, args: $args) {
+                launch(self.n, |i| $pass(i, &args));
+            })*
+            $(fn $rname(&mut self, args: $rargs, partial: ViewMut<'_, [f64; 2]>) -> [f64; 2] {
+                let n = self.n;
+                let ranges = n.div_ceil($range);
+                (0..ranges).into_par_iter().for_each(|r| $rpass(r, n, &args, partial));
+                sum_in_order(&partial.read(), ranges)
+            })*
+        }
+    };
 }
+
+pass_table!(cpu_passes);
 
 /// The first `ranges` partial dot products added in range order.
 pub fn sum_in_order(partial: &View<'_, [f64; 2]>, ranges: usize) -> [f64; 2] {

@@ -2,7 +2,7 @@
 //! build.rs from `kernels/`), launches by kernel name, and allocations with clear errors.
 //!
 //! [`Gpu::emulated`] stands in for a device where there is none: its memory is host memory and
-//! a launch runs the kernels' host builds (`coil_kernels::ptx::ENTRIES`) over every thread of
+//! a launch runs the kernels' host builds (`coil_kernels::ptx::find_entry`) over every thread of
 //! the grid with rayon, so the backend's host side runs and is tested without a GPU. As a
 //! device's stream does, it runs launches later than they are queued: at the next copy,
 //! synchronisation or timing mark.
@@ -11,7 +11,7 @@ use crate::cuda::emulator::{lock, Emulator, HostMemory, QueuedLaunch, BLOCK};
 pub use crate::cuda::error::CudaError;
 use crate::cuda::kernel_module::{cubin_for, load_kernels, missing_driver_function, KernelCode};
 pub use crate::cuda::kernel_module::{CUBIN_ARCHS, DRIVER_FUNCTIONS, FATBIN, PTX};
-use coil_kernels::ptx::{Emulated, ENTRIES};
+use coil_kernels::ptx::{find_entry, Emulated};
 use cudarc::driver::{
     sys, CudaContext, CudaEvent, CudaFunction, CudaModule, CudaSlice, CudaStream, DevicePtr, DeviceRepr, DriverError,
     LaunchConfig, PushKernelArg,
@@ -399,8 +399,7 @@ impl Gpu {
                 }
             }
             Engine::Emulated(emulator) => {
-                let entry: Emulated =
-                    ENTRIES.iter().find(|(n, _)| *n == name).ok_or_else(|| CudaError::MissingKernel(name.into()))?.1;
+                let entry: Emulated = find_entry(name).ok_or_else(|| CudaError::MissingKernel(name.into()))?;
                 emulator.launches += 1;
                 let params = args.iter().map(|a| a.bytes()).collect();
                 lock(&emulator.stream).launches.push(QueuedLaunch { entry, params, blocks, seed: emulator.launches });

@@ -6,80 +6,31 @@
 
 use crate::simulation::host_particles::HostParticles;
 use crate::simulation::particles::{ImplicitViews, Particles, PressureViews};
-use coil_kernels::acceleration::AccelerationArgs;
+use crate::simulation::pass_table::pass_table;
 use coil_kernels::cell_grid::{Neighborhood, Neighbors};
-use coil_kernels::continuity_molteni2009::{ContinuityArgs, DensityIntegrationArgs};
-use coil_kernels::cross_viscosity::Rheology;
-use coil_kernels::density::{DensityArgs, DensityKernel};
-use coil_kernels::dfsph_bender2017::{
-    DensityErrorArgs, DensityRateArgs, DivergenceErrorArgs, ErrorSumArgs, FactorArgs, PressureChangeArgs, WarmStartArgs,
-};
 use coil_kernels::diagnostics::StateFigures;
 use coil_kernels::fluid::Fluid;
-use coil_kernels::leapfrog::LeapfrogArgs;
-use coil_kernels::mirrored_wall::MirroredWallArgs;
-use coil_kernels::nozzle::{NozzleArgs, NozzleShiftArgs};
-use coil_kernels::shifting_sun2017::{ShiftArgs, ShiftingArgs};
 use coil_kernels::topology::{Periodic, Topology};
-use coil_kernels::velocity_gradient::GradientEstimate;
 use coil_kernels::view::{Mat3ViewMut, SymTensorViewMut, Vec3View, Vec3ViewMut, View, ViewMut};
-use coil_kernels::viscosity::hourglass_ganzenmuller2015::VelocityGradientArgs;
-use coil_kernels::viscosity::implicit_weiler2018::{
-    CgDirectionArgs, CgStartArgs, CgStepArgs, DotArgs, ImplicitStressArgs, LaggedViscosityArgs, PredictorArgs, SystemBlockArgs,
-    SystemProductArgs, ViscousAccelerationArgs,
-};
-use coil_kernels::viscosity::laplacian_morris1997::{
-    MorrisSystemBlockArgs, MorrisSystemProductArgs, ParticleViscosity, ShearViscosityArgs,
-};
-use coil_kernels::viscosity::stress_andrade2014::StressArgs;
-use coil_kernels::viscosity::ViscousOperator;
 use coil_kernels::Real;
 use std::fmt::Display;
 
-/// A backend's way of running each pass over its particles, with neighbors visited through `N`
-/// in topology `T`.
-pub trait Passes<R: Real, T: Topology, N: Neighbors> {
-    fn density<K: DensityKernel>(&mut self, args: DensityArgs<'_, R, N>);
-    fn continuity<K: DensityKernel>(&mut self, args: ContinuityArgs<'_, R, N>);
-    /// The walls' density, and the fluid's continuity density raised to its sum, with the
-    /// spiky kernel, which the divergence-free solves require.
-    fn continuity_floor(&mut self, args: DensityArgs<'_, R, N>);
-    fn density_integration(&mut self, args: DensityIntegrationArgs<'_, R>);
-    fn mirrored_wall(&mut self, args: MirroredWallArgs<'_, R, T>);
-    fn stress<Rh: Rheology<R>, G: GradientEstimate>(&mut self, args: StressArgs<'_, R, Rh, G, N>);
-    fn shear_viscosity<Rh: Rheology<R>>(&mut self, args: ShearViscosityArgs<'_, R, Rh, N>);
-    fn velocity_gradient<Rh: Rheology<R>>(&mut self, args: VelocityGradientArgs<'_, R, Rh, N>);
-    fn acceleration<Op: ViscousOperator<R>>(&mut self, args: AccelerationArgs<'_, R, Op, N>);
-    fn nozzle(&mut self, args: NozzleArgs<'_, R>);
-    fn leapfrog(&mut self, args: LeapfrogArgs<'_, R, T>);
-    fn shifting(&mut self, args: ShiftingArgs<'_, R, N>);
-    fn nozzle_shift(&mut self, args: NozzleShiftArgs<'_, R>);
-    fn shift(&mut self, args: ShiftArgs<'_, R, T>);
-    fn predictor(&mut self, args: PredictorArgs<'_, R>);
-    fn lagged_viscosity<Rh: Rheology<R>>(&mut self, args: LaggedViscosityArgs<'_, R, Rh, N>);
-    fn implicit_stress(&mut self, args: ImplicitStressArgs<'_, R, N>);
-    fn system_block(&mut self, args: SystemBlockArgs<'_, R, N>);
-    fn system_product(&mut self, args: SystemProductArgs<'_, R, N>);
-    fn morris_system_block<Nu: ParticleViscosity<R>>(&mut self, args: MorrisSystemBlockArgs<'_, R, Nu, N>);
-    fn morris_system_product<Nu: ParticleViscosity<R>>(&mut self, args: MorrisSystemProductArgs<'_, R, Nu, N>);
-    fn cg_start(&mut self, args: CgStartArgs<'_, R>);
-    fn cg_step(&mut self, args: CgStepArgs<'_, R>);
-    fn cg_direction(&mut self, args: CgDirectionArgs<'_, R>);
-    fn viscous_acceleration(&mut self, args: ViscousAccelerationArgs<'_, R>);
-    /// The two dot products of `args` over the live particles, their ranges' parts written to
-    /// `partial` and added in range order: the same on every backend and thread count. A
-    /// backend that failed returns NaN and reports the fault when the schedule ends.
-    fn dots(&mut self, args: DotArgs<'_, R>, partial: ViewMut<'_, [f64; 2]>) -> [f64; 2];
-    fn dfsph_factor(&mut self, args: FactorArgs<'_, R, N>);
-    fn divergence_error(&mut self, args: DivergenceErrorArgs<'_, R, N>);
-    fn density_error(&mut self, args: DensityErrorArgs<'_, R, N>);
-    fn dfsph_density_rate(&mut self, args: DensityRateArgs<'_, R, N>);
-    fn pressure_change(&mut self, args: PressureChangeArgs<'_, R, N>);
-    fn warm_start(&mut self, args: WarmStartArgs<'_, R>);
-    /// The error of `args` summed over the live fluid particles, and their count, in range
-    /// order as [`Passes::dots`].
-    fn error_sums(&mut self, args: ErrorSumArgs<'_, R>, partial: ViewMut<'_, [f64; 2]>) -> [f64; 2];
+/// Declares the `Passes` trait from the table's rows.
+macro_rules! declare_passes {
+    (
+        passes { $($(#[$doc:meta])* $name:ident $(<$($g:ident: $bound:path),+>)? ($args:ty) => $pass:expr, [$($part:expr),+];)* }
+        reductions { $($(#[$rdoc:meta])* $rname:ident ($rargs:ty) => $rpass:expr, $range:expr, $which:ident, [$($rpart:expr),+];)* }
+    ) => {
+        /// A backend's way of running each pass over its particles, with neighbors visited
+        /// through `N` in topology `T`: one method per row of `pass_table`.
+        pub trait Passes<R: Real, T: Topology, N: Neighbors> {
+            $($(#[$doc])* fn $name $(<$($g: $bound),+>)? (&mut self, args: $args);)*
+            $($(#[$rdoc])* fn $rname(&mut self, args: $rargs, partial: ViewMut<'_, [f64; 2]>) -> [f64; 2];)*
+        }
+    };
 }
+
+pass_table!(declare_passes);
 
 /// A backend's particle buffers as views over its own memory, live particles only, in the
 /// sorted order of the last sort.

@@ -11,6 +11,7 @@ pub mod instability;
 pub mod model;
 pub mod particle_array;
 pub mod particles;
+pub(crate) mod pass_table;
 pub mod run_state;
 mod schedule;
 pub mod sorted_grid;

@@ -5,7 +5,7 @@
 //! Device memory is host memory, filled with 0xFF bytes when allocated (a GPU's is not zeroed).
 //! A module is coil's PTX, alone or in an uncompressed fatbin (which must hold a cubin for this
 //! device, sm_90, or the PTX): the stand-in reads each entry's parameter sizes from the PTX, and
-//! a launch runs the kernels' host builds (`coil_kernels::ptx::ENTRIES`) by name over every
+//! a launch runs the kernels' host builds (`coil_kernels::ptx::find_entry`) by name over every
 //! thread of its grid, each parameter checked against its entry's type. Work on the stream
 //! (launches, copies, sets, frees, events) is queued and runs only at a synchronisation, as on
 //! a GPU, so a host read that does not wait reads nothing, and a kernel that reads outside its
@@ -23,7 +23,7 @@
 //! - `FAKE_CUDA_REFUSE=fatbin`: a fatbin is refused, as a driver older than the `ptxas` that
 //!   compiled it refuses it; `=all`: PTX too, as a driver older than its ISA, with a JIT log.
 
-use coil_kernels::ptx::{Emulated, Param, ENTRIES};
+use coil_kernels::ptx::{find_entry, Emulated, Param};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::ffi::{c_char, c_int, c_uint, c_void, CStr};
@@ -603,7 +603,7 @@ pub extern "C" fn cuModuleUnload(module: *mut c_void) -> CuResult {
 pub unsafe extern "C" fn cuModuleGetFunction(function: *mut *mut c_void, module: *mut c_void, name: *const c_char) -> CuResult {
     let module = &*module.cast::<Module>();
     let Ok(name) = CStr::from_ptr(name).to_str() else { return NOT_FOUND };
-    let (Some(sizes), Some(&(_, entry))) = (module.entries.get(name), ENTRIES.iter().find(|(n, _)| *n == name)) else {
+    let (Some(sizes), Some(entry)) = (module.entries.get(name), find_entry(name)) else {
         return NOT_FOUND;
     };
     let kernel = Kernel { name: name.to_string(), entry, param_sizes: sizes.clone() };
