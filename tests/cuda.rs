@@ -1634,7 +1634,7 @@ fn every_carried_array_follows_its_particle_on_the_device() {
     use coil::run::checkpoint::{encode, Checkpoint};
     use coil::simulation::variant::{with_precision_and_model, WithModel};
     use coil::simulation::Setup;
-    use common::carried::{by_id, carrying_scene, Mark, Permute, Starts, NEW_ID, NEW_POSITION, NEW_VELOCITY};
+    use common::carried::{by_id, carrying_scene, mark_and_reverse, Starts, NEW_ID, NEW_POSITION, NEW_VELOCITY};
     use std::marker::PhantomData;
 
     struct OnDevice<'a>(&'a Scene, Engine);
@@ -1648,12 +1648,7 @@ fn every_carried_array_follows_its_particle_on_the_device() {
                 cpu.step().expect("stable");
             }
             let n = cpu.particles().len();
-            let ids = cpu.particles().id[..n].to_vec();
-            coil::visit_carried!(mut &mut Mark::<R> { ids, component: 0, real: PhantomData }; cpu.particles_mut());
-            let before = by_id(cpu.particles());
-            let reversed: Vec<usize> = (0..n).rev().collect();
-            coil::visit_carried!(mut &mut Permute::<R> { order: &reversed, real: PhantomData }; cpu.particles_mut());
-            let scrambled = cpu.particles().id[..n].to_vec();
+            let (before, scrambled) = mark_and_reverse(cpu.particles_mut());
 
             let bytes = encode(&cpu.run, cpu.particles(), scene, &coil::run::Tally::default());
             let mut setup = Setup::<R, M>::new(scene, &initial, model);

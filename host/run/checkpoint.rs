@@ -431,13 +431,17 @@ struct ReadCarried<'b, R> {
 }
 
 impl<R> ReadCarried<'_, R> {
-    /// Each component's `n` entries of `width` bytes, decoded by `from`.
-    fn read<T>(&mut self, what: &str, components: &mut [ParticleArray<T>], width: usize, from: impl Fn(&[u8]) -> T) {
+    /// Each component's `n` entries of `width` bytes, decoded by `from`; an array the format
+    /// version did not keep keeps what the run set up.
+    fn read<T>(&mut self, array: Carried, components: &mut [ParticleArray<T>], width: usize, from: impl Fn(&[u8]) -> T) {
+        if self.version < array.since {
+            return;
+        }
         for c in components {
             if self.result.is_err() {
                 return;
             }
-            match self.r.take(self.n * width, what) {
+            match self.r.take(self.n * width, array.what) {
                 Ok(bytes) => {
                     for (v, b) in c[..self.n].iter_mut().zip(bytes.chunks_exact(width)) {
                         *v = from(b);
@@ -453,17 +457,17 @@ impl<'a, R: Real> VisitCarried<&'a mut [ParticleArray<f64>], &'a mut [ParticleAr
     for ReadCarried<'_, R>
 {
     fn wide(&mut self, array: Carried, components: &'a mut [ParticleArray<f64>]) {
-        self.read(array.what, components, 8, |b| f64::from_le_bytes(b.try_into().expect("8 bytes")));
+        self.read(array, components, 8, |b| f64::from_le_bytes(b.try_into().expect("8 bytes")));
     }
     fn real(&mut self, array: Carried, components: &'a mut [ParticleArray<R>]) {
         let real = |b: &[u8]| match b.len() {
             4 => R::from_f64(f32::from_le_bytes(b.try_into().expect("4 bytes")) as f64),
             _ => R::from_f64(f64::from_le_bytes(b.try_into().expect("8 bytes"))),
         };
-        self.read(array.what, components, self.real_bytes, real);
+        self.read(array, components, self.real_bytes, real);
     }
     fn index(&mut self, array: Carried, components: &'a mut [ParticleArray<u32>]) {
-        self.read(array.what, components, 4, |b| u32::from_le_bytes(b.try_into().expect("4 bytes")));
+        self.read(array, components, 4, |b| u32::from_le_bytes(b.try_into().expect("4 bytes")));
     }
     fn real_where(&mut self, array: Carried, components: Option<&'a mut [ParticleArray<R>]>) {
         if self.result.is_err() {
@@ -481,5 +485,38 @@ impl<'a, R: Real> VisitCarried<&'a mut [ParticleArray<f64>], &'a mut [ParticleAr
             (Some(_), Ok(false)) => self.result = Err(format!("holds none of {}, which the scene's run carries", array.what)),
             (None, Ok(true)) => self.result = Err(format!("holds {}, which the scene's run does not carry", array.what)),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::simulation::particles::ModelFields;
+
+    /// The latest format version that kept each carried array.
+    struct Latest(u32);
+
+    impl<'a> VisitCarried<&'a [ParticleArray<f64>], &'a [ParticleArray<f64>], &'a [ParticleArray<u32>]> for Latest {
+        fn wide(&mut self, array: Carried, _: &'a [ParticleArray<f64>]) {
+            self.0 = self.0.max(array.since);
+        }
+        fn real(&mut self, array: Carried, _: &'a [ParticleArray<f64>]) {
+            self.0 = self.0.max(array.since);
+        }
+        fn index(&mut self, array: Carried, _: &'a [ParticleArray<u32>]) {
+            self.0 = self.0.max(array.since);
+        }
+    }
+
+    /// An array added to the carried state names the format version that first keeps it, and
+    /// the checkpoint writes that version or a later one.
+    #[test]
+    fn the_format_version_keeps_every_carried_array() {
+        let every = ModelFields { density_rate: true, implicit: true, pressure_solve: true, ..ModelFields::default() };
+        let p = Particles::<f64>::with_capacity(1, every);
+        let mut latest = Latest(0);
+        crate::visit_carried!(ref &mut latest; p);
+        assert!(latest.0 <= FORMAT_VERSION, "an array kept since version {} > {FORMAT_VERSION}", latest.0);
+        assert!(latest.0 >= 5, "the pressure solves' state, since version 5, is visited");
     }
 }

@@ -171,3 +171,16 @@ impl<'a, R: Real> VisitCarried<&'a [ParticleArray<f64>], &'a [ParticleArray<R>],
         self.check(array, values, NEW_POSITION, NEW_VELOCITY, NEW_ID);
     }
 }
+
+/// Marks every real carried array of the live particles `p` (`Mark`) and reverses their order
+/// (`Permute`): returns each particle's carried entries by id, and the ids in the reversed
+/// order, from which a sort must move them.
+pub fn mark_and_reverse<R: Real>(p: &mut Particles<R>) -> (HashMap<u32, Vec<u64>>, Vec<u32>) {
+    let n = p.len();
+    let ids = p.id[..n].to_vec();
+    coil::visit_carried!(mut &mut Mark::<R> { ids, component: 0, real: PhantomData }; p);
+    let before = by_id(p);
+    let reversed: Vec<usize> = (0..n).rev().collect();
+    coil::visit_carried!(mut &mut Permute::<R> { order: &reversed, real: PhantomData }; p);
+    (before, p.id[..n].to_vec())
+}

@@ -2,7 +2,7 @@
 //! step before) survives every way it travels on the CPU: the sort, an inlet's new particles,
 //! and a checkpoint read back into a fresh run.
 
-use crate::common::carried::{by_id, carrying_scene, Mark, Permute, Starts, NEW_ID, NEW_POSITION, NEW_VELOCITY};
+use crate::common::carried::{by_id, carrying_scene, mark_and_reverse, Starts, NEW_ID, NEW_POSITION, NEW_VELOCITY};
 use coil::cpu::simulation::CpuSimulation;
 use coil::run::checkpoint::{encode, Checkpoint};
 use coil::run::Tally;
@@ -29,12 +29,7 @@ impl WithModel for Survives<'_> {
         assert!(n > 40, "the inlet added {n} particles: several layers");
 
         // The sort: every particle's carried entries follow it, from an order far from sorted.
-        let ids = sim.particles().id[..n].to_vec();
-        coil::visit_carried!(mut &mut Mark::<R> { ids, component: 0, real: PhantomData }; sim.particles_mut());
-        let before = by_id(sim.particles());
-        let reversed: Vec<usize> = (0..n).rev().collect();
-        coil::visit_carried!(mut &mut Permute::<R> { order: &reversed, real: PhantomData }; sim.particles_mut());
-        let scrambled = sim.particles().id[..n].to_vec();
+        let (before, scrambled) = mark_and_reverse(sim.particles_mut());
         assert_eq!(sim.backend.sort_and_reorder().expect("the CPU's sort"), 0, "every particle stays in the domain");
         assert_ne!(sim.particles().id[..n], scrambled[..], "the sort moved the particles");
         assert_eq!(by_id(sim.particles()), before, "the sort kept every carried entry with its particle");
