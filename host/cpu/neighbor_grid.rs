@@ -4,13 +4,14 @@
 
 use crate::cpu::parallel::launch;
 use crate::simulation::carried_state::{Carried, VisitCarried};
+use crate::simulation::cell_sort::{sort_by_cell, SortPasses};
 use crate::simulation::particle_array::ParticleArray;
 use crate::simulation::particles::{view_mut, Particles};
 use crate::simulation::sorted_grid::SortedGrid;
 use coil_kernels::cell_grid::{hash_pass, HashArgs, Neighborhood};
 use coil_kernels::counting_sort::{
-    chunk_total, count_particle, gather, scan_by_levels, scan_chunk, scan_chunk_in_place, scan_chunk_offsets, scan_levels_len,
-    scatter, sort_bucket, sum_chunk, Counters, ScanStep, CPU_SCAN_CHUNK,
+    chunk_total, count_particle, gather, scan_chunk, scan_chunk_in_place, scan_chunk_offsets, scan_levels_len, scatter,
+    sort_bucket, sum_chunk, Counters, ScanStep, CPU_SCAN_CHUNK,
 };
 use coil_kernels::fluid_cells::{holds_fluid_pass, near_fluid_pass, HoldsFluidArgs, NearFluidArgs};
 use coil_kernels::neighbor_list::{neighbor_list_pass, ListedNeighborhood, NeighborListArgs, NEIGHBOR_SLOTS};
@@ -18,6 +19,7 @@ use coil_kernels::smoothing::SmoothingKernels;
 use coil_kernels::topology::{Open, Topology};
 use coil_kernels::view::{Vec3View, View, ViewMut};
 use coil_kernels::Real;
+use std::convert::Infallible;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 /// The CPU's arrays for sorting particles into a [`SortedGrid`], and its neighbor lists.
@@ -108,56 +110,12 @@ impl GridSort {
             + self.holds_fluid.len()
     }
 
-    /// Sorts the particles into `cells`, dropping those outside the domain; returns how many
-    /// left.
+    /// Sorts the particles into `cells` (`cell_sort`), dropping those outside the domain;
+    /// returns how many left.
     pub fn sort<R: Real>(&mut self, cells: &mut SortedGrid, p: &mut Particles<R>) -> usize {
         let n = p.len();
-        let grid = cells.grid;
-        let args = HashArgs { grid, position: p.position_view(), cell_key: view_mut(&mut self.cell_key, n) };
-        launch(n, |i| hash_pass(i, &args));
-
-        let counters = Counters::new(&self.counters);
-        let buckets = self.counters.len();
-        launch(buckets, |k| self.counters[k].store(0, Ordering::Relaxed));
-        let keys = View::new(&self.cell_key[..n]);
-        launch(n, |i| count_particle(i, keys, counters));
-
-        // Exclusive scan: chunk totals in parallel, their offsets by levels, then each chunk.
-        let chunks = buckets.div_ceil(CPU_SCAN_CHUNK);
-        let levels = ViewMut::new(&mut self.chunk_offsets);
-        let totals = levels.range(0, chunks);
-        // SAFETY: invocation c writes only entry c.
-        launch(chunks, |c| unsafe { totals.write(c, chunk_total(c, CPU_SCAN_CHUNK, counters)) });
-        let level = |(start, len): (usize, usize)| levels.range(start, len);
-        let scanned = scan_by_levels::<std::convert::Infallible>(chunks, |step| {
-            match step {
-                ScanStep::Up { values, sums } => {
-                    let (values, sums) = (level(values).read(), level(sums));
-                    // SAFETY: as above.
-                    launch(sums.len(), |c| unsafe { sums.write(c, sum_chunk(c, values)) });
-                }
-                ScanStep::Top(top) => scan_chunk_offsets(level(top)),
-                ScanStep::Down { values, offsets } => {
-                    let (values, offsets) = (level(values), level(offsets).read());
-                    launch(offsets.len(), |c| scan_chunk_in_place(c, offsets.at(c), values));
-                }
-            }
-            Ok(())
-        });
-        let Ok(()) = scanned;
-        let offsets = totals.read();
-        let starts = ViewMut::new(cells.cell_start_mut());
-        launch(chunks, |c| scan_chunk(c, CPU_SCAN_CHUNK, offsets.at(c), counters, starts));
-
-        let order = view_mut(&mut self.order, n);
-        launch(n, |i| scatter(i, keys, counters, order));
-        let starts = View::new(cells.cell_start());
-        launch(grid.cell_count() as usize, |c| sort_bucket(c, starts, order));
-
-        let live = cells.live();
-        reorder(p, View::new(&self.order[..live]), live);
-        self.mark_cells_near_fluid(cells, View::new(&p.id[..live]));
-        n - live
+        let Ok(()) = sort_by_cell(&mut CpuCellSort { sort: self, cells, p, n });
+        n - p.len()
     }
 
     /// The `fluid_cells` passes over the sorted particles' ids, when the grid tracks fluid.
@@ -178,6 +136,101 @@ impl GridSort {
             let args = NearFluidArgs { grid, topology: Open, cell_start, holds_fluid, near_fluid };
             launch(count, |c| near_fluid_pass(c, &args));
         }
+    }
+}
+
+/// The CPU's sort passes: each over its particles, buckets or chunks with rayon, chunks of
+/// `CPU_SCAN_CHUNK` buckets.
+struct CpuCellSort<'a, R> {
+    sort: &'a mut GridSort,
+    cells: &'a mut SortedGrid,
+    p: &'a mut Particles<R>,
+    /// Particles before the sort.
+    n: usize,
+}
+
+impl<R: Real> SortPasses for CpuCellSort<'_, R> {
+    type Fault = Infallible;
+
+    fn chunks(&self) -> usize {
+        self.sort.counters.len().div_ceil(CPU_SCAN_CHUNK)
+    }
+
+    fn hash(&mut self) -> Result<(), Infallible> {
+        let n = self.n;
+        let args =
+            HashArgs { grid: self.cells.grid, position: self.p.position_view(), cell_key: view_mut(&mut self.sort.cell_key, n) };
+        launch(n, |i| hash_pass(i, &args));
+        Ok(())
+    }
+
+    fn clear_counters(&mut self) -> Result<(), Infallible> {
+        let counters = &self.sort.counters;
+        launch(counters.len(), |k| counters[k].store(0, Ordering::Relaxed));
+        Ok(())
+    }
+
+    fn count_particles(&mut self) -> Result<(), Infallible> {
+        let (counters, keys) = (Counters::new(&self.sort.counters), View::new(&self.sort.cell_key[..self.n]));
+        launch(self.n, |i| count_particle(i, keys, counters));
+        Ok(())
+    }
+
+    fn chunk_totals(&mut self) -> Result<(), Infallible> {
+        let chunks = self.chunks();
+        let counters = Counters::new(&self.sort.counters);
+        let totals = ViewMut::new(&mut self.sort.chunk_offsets[..chunks]);
+        // SAFETY: invocation c writes only entry c.
+        launch(chunks, |c| unsafe { totals.write(c, chunk_total(c, CPU_SCAN_CHUNK, counters)) });
+        Ok(())
+    }
+
+    fn scan_step(&mut self, step: ScanStep) -> Result<(), Infallible> {
+        let levels = ViewMut::new(&mut self.sort.chunk_offsets);
+        let level = |(start, len): (usize, usize)| levels.range(start, len);
+        match step {
+            ScanStep::Up { values, sums } => {
+                let (values, sums) = (level(values).read(), level(sums));
+                // SAFETY: invocation c writes only entry c.
+                launch(sums.len(), |c| unsafe { sums.write(c, sum_chunk(c, values)) });
+            }
+            ScanStep::Top(top) => scan_chunk_offsets(level(top)),
+            ScanStep::Down { values, offsets } => {
+                let (values, offsets) = (level(values), level(offsets).read());
+                launch(offsets.len(), |c| scan_chunk_in_place(c, offsets.at(c), values));
+            }
+        }
+        Ok(())
+    }
+
+    fn scan_chunks(&mut self) -> Result<(), Infallible> {
+        let chunks = self.chunks();
+        let (counters, offsets) = (Counters::new(&self.sort.counters), View::new(&self.sort.chunk_offsets[..chunks]));
+        let starts = ViewMut::new(self.cells.cell_start_mut());
+        launch(chunks, |c| scan_chunk(c, CPU_SCAN_CHUNK, offsets.at(c), counters, starts));
+        Ok(())
+    }
+
+    fn scatter_and_sort_buckets(&mut self) -> Result<(), Infallible> {
+        let n = self.n;
+        let (counters, keys) = (Counters::new(&self.sort.counters), View::new(&self.sort.cell_key[..n]));
+        let order = view_mut(&mut self.sort.order, n);
+        launch(n, |i| scatter(i, keys, counters, order));
+        let starts = View::new(self.cells.cell_start());
+        launch(self.cells.grid.cell_count() as usize, |c| sort_bucket(c, starts, order));
+        Ok(())
+    }
+
+    fn reorder(&mut self) -> Result<(), Infallible> {
+        let live = self.cells.live();
+        reorder(self.p, View::new(&self.sort.order[..live]), live);
+        Ok(())
+    }
+
+    fn mark_cells_near_fluid(&mut self) -> Result<(), Infallible> {
+        let live = self.p.len();
+        self.sort.mark_cells_near_fluid(self.cells, View::new(&self.p.id[..live]));
+        Ok(())
     }
 }
 

@@ -8,21 +8,20 @@
 //! reads the diagnostics (largest speed, compression, runaway particles) and the count.
 
 use super::device_array::{vec3_view, vec3_view_mut, vec3_zeros};
-use super::device_carried::{append_carried, copy_carried, reorder_carried, Transfer};
-use super::device_state::{buckets_chunks, DeviceState, DIAGNOSTICS_RANGE};
+use super::device_carried::{append_carried, copy_carried, Transfer};
+use super::device_cell_sort::DeviceCellSort;
+use super::device_state::{DeviceState, DIAGNOSTICS_RANGE};
 use super::gpu::{ByValue, CudaError, Gpu};
 use super::gpu_passes::{kernel, GpuPasses};
-use super::scan::scan_chunk_totals;
 use crate::simulation::backend::{Backend, ParticleViews, Readout, Schedule};
+use crate::simulation::cell_sort::sort_by_cell;
 use crate::simulation::host_particles::HostParticles;
 use crate::simulation::model::Model;
 use crate::simulation::particles::{ModelFields, Particles};
 use crate::simulation::{Setup, Simulation, StepError};
-use coil_kernels::cell_grid::{HashArgs, Neighborhood};
-use coil_kernels::counting_sort::DEVICE_SCAN_CHUNK;
+use coil_kernels::cell_grid::Neighborhood;
 use coil_kernels::diagnostics::{DiagnosticsArgs, StateFigures};
 use coil_kernels::fluid::Fluid;
-use coil_kernels::fluid_cells::{HoldsFluidArgs, NearFluidArgs};
 use coil_kernels::topology::{Periodic, Topology};
 use coil_kernels::view::{Mat3ViewMut, View};
 use coil_kernels::Real;
@@ -145,73 +144,6 @@ impl<R: Real> CudaBackend<R> {
             near_fluid: self.device.near_fluid.view(self.device.near_fluid.len()),
         }
     }
-
-    /// Line 3: the counting sort by cell on the device, then the reorder of every field that
-    /// carries state. Particles outside the domain fall into the last bucket and drop out.
-    fn sort(&mut self) -> Result<(), CudaError> {
-        let n = self.bound;
-        let threads = n as u32;
-        let count = self.count();
-        let grid = self.mirror.grid.grid;
-        let cells = grid.cell_count();
-        let d = &mut self.device;
-        let gpu = &mut self.gpu;
-        d.counters.clear(gpu)?;
-        let buckets = d.counters.len();
-        let chunks = buckets_chunks(buckets);
-        let hash = HashArgs { grid, position: vec3_view(&d.position, n), cell_key: d.cell_key.view_mut(n) };
-        let keys = ByValue(d.cell_key.view(n));
-        let counters = ByValue(d.counters.counters());
-        let chunk = ByValue(DEVICE_SCAN_CHUNK as u32);
-        // SAFETY: each argument list is its entry's in `coil_kernels::ptx`, over arrays sized
-        // to the capacity (particles) or to the grid (buckets, chunks).
-        unsafe {
-            gpu.launch("hash", threads, &[&count, &ByValue(hash)])?;
-            gpu.launch("count_particles", threads, &[&count, &keys, &counters])?;
-            let totals = ByValue(d.chunk_offsets.view_mut(chunks));
-            gpu.launch("scan_chunk_totals", chunks as u32, &[&ByValue(chunks as u32), &chunk, &counters, &totals])?;
-            scan_chunk_totals(gpu, &d.chunk_offsets, chunks)?;
-            let offsets = ByValue(d.chunk_offsets.view(chunks));
-            let starts = ByValue(d.cell_start.view_mut(buckets + 1));
-            gpu.launch("scan_chunks", chunks as u32, &[&ByValue(chunks as u32), &chunk, &offsets, &counters, &starts])?;
-            gpu.launch("scatter_particles", threads, &[&count, &keys, &counters, &ByValue(d.order.view_mut(n))])?;
-            let starts = ByValue(d.cell_start.view(buckets + 1));
-            gpu.launch("sort_buckets", cells, &[&ByValue(cells), &starts, &ByValue(d.order.view_mut(n))])?;
-            gpu.launch("set_count", 1, &[&ByValue(d.count.view_mut(1)), &starts, &ByValue(cells)])?;
-        }
-        reorder_carried(gpu, d, d.order.view(n), n)
-    }
-
-    /// The `fluid_cells` passes over the sorted particles, when the run tracks fluid (else the
-    /// host's marks, every cell near fluid, stay as uploaded).
-    fn mark_cells_near_fluid<T: Topology>(&mut self, topology: T) -> Result<(), CudaError> {
-        let d = &self.device;
-        let (Some(boundary_count), Some(holds_fluid)) = (self.mirror.grid.tracks_fluid(), &d.holds_fluid) else {
-            return Ok(());
-        };
-        let grid = self.mirror.grid.grid;
-        let cells = grid.cell_count();
-        let cell_start = d.cell_start.view(d.cell_start.len());
-        let holds = HoldsFluidArgs {
-            cell_start,
-            id: d.id.view(self.bound),
-            boundary_count,
-            holds_fluid: holds_fluid.view_mut(cells as usize),
-        };
-        let near = NearFluidArgs {
-            grid,
-            topology,
-            cell_start,
-            holds_fluid: holds_fluid.view(cells as usize),
-            near_fluid: d.near_fluid.view_mut(cells as usize),
-        };
-        // SAFETY: holds_fluid(cells, args) and near_fluid_<T>(cells, args) over the grid's cells.
-        unsafe {
-            self.gpu.launch("holds_fluid", cells, &[&ByValue(cells), &ByValue(holds)])?;
-            let near_fluid = if T::PERIODIC { "near_fluid_periodic" } else { "near_fluid" };
-            self.gpu.launch(near_fluid, cells, &[&ByValue(cells), &ByValue(near)])
-        }
-    }
 }
 
 impl<R: Real> Backend<R> for CudaBackend<R> {
@@ -245,11 +177,8 @@ impl<R: Real> Backend<R> for CudaBackend<R> {
     /// The device's count is read back with the diagnostics: the particles the sort drops are
     /// counted then.
     fn sort_and_reorder(&mut self) -> Result<usize, CudaError> {
-        self.sort()?;
-        match self.periodic() {
-            Some(periodic) => self.mark_cells_near_fluid(periodic)?,
-            None => self.mark_cells_near_fluid(coil_kernels::topology::Open)?,
-        }
+        let (gpu, d, grid, bound) = (&mut self.gpu, &mut self.device, &self.mirror.grid, self.bound);
+        sort_by_cell(&mut DeviceCellSort { gpu, d, grid, bound })?;
         Ok(0)
     }
 

@@ -7,6 +7,8 @@ pub mod device_array;
 #[cfg(feature = "cuda")]
 mod device_carried;
 #[cfg(feature = "cuda")]
+mod device_cell_sort;
+#[cfg(feature = "cuda")]
 mod device_state;
 #[cfg(feature = "cuda")]
 mod emulator;

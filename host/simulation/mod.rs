@@ -3,6 +3,7 @@
 
 pub mod backend;
 pub mod carried_state;
+pub mod cell_sort;
 pub mod dfsph_bender2017;
 pub mod host_particles;
 pub mod implicit_weiler2018;
