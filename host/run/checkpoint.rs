@@ -13,13 +13,12 @@
 //! fingerprint, the fields in the order `write` gives them, and an FNV-1a checksum of all the
 //! bytes before it, so a damaged file is refused rather than misread.
 
+use super::checkpoint_arrays::{ReadCarried, WriteCarried};
 use super::fields::fingerprint;
 use super::summary::{Tally, WrittenFile};
 use crate::fnv1a::fnv1a;
 use crate::scene::Scene;
-use crate::simulation::carried_state::{Carried, VisitCarried};
 use crate::simulation::model::Model;
-use crate::simulation::particle_array::ParticleArray;
 use crate::simulation::particles::Particles;
 use crate::simulation::run_state::SolveStatistics;
 use crate::simulation::{Diagnostics, RunState, Setup};
@@ -34,7 +33,7 @@ const MAGIC: &[u8; 8] = b"COILCKPT";
 /// is set (a version 3 checkpoint, which has neither, is read as unset). 5: then a flag and
 /// the pressure solves' stiffness sums where pressure is solved. 6: then the iterations of the
 /// run's implicit viscosity, divergence and density solves, which its summary reports.
-const FORMAT_VERSION: u32 = 6;
+pub(super) const FORMAT_VERSION: u32 = 6;
 
 /// The largest checkpoint read (bytes): a billion particles in f64.
 const MAX_CHECKPOINT_BYTES: u64 = 1 << 37;
@@ -55,32 +54,32 @@ fn limit_from(code: u8) -> Option<Limit> {
 }
 
 /// Appends fields to a checkpoint's bytes.
-struct Writer(Vec<u8>);
+pub(super) struct Writer(pub(super) Vec<u8>);
 
 impl Writer {
-    fn u8(&mut self, v: u8) {
+    pub(super) fn u8(&mut self, v: u8) {
         self.0.push(v);
     }
-    fn u32(&mut self, v: u32) {
+    pub(super) fn u32(&mut self, v: u32) {
         self.0.extend_from_slice(&v.to_le_bytes());
     }
-    fn u64(&mut self, v: u64) {
+    pub(super) fn u64(&mut self, v: u64) {
         self.0.extend_from_slice(&v.to_le_bytes());
     }
-    fn f64(&mut self, v: f64) {
+    pub(super) fn f64(&mut self, v: f64) {
         self.0.extend_from_slice(&v.to_le_bytes());
     }
     /// `None` as NaN, which no time or dt of a run can be.
     fn optional_f64(&mut self, v: Option<f64>) {
         self.f64(v.unwrap_or(f64::NAN));
     }
-    fn f64s(&mut self, v: &[f64]) {
+    pub(super) fn f64s(&mut self, v: &[f64]) {
         for &x in v {
             self.f64(x);
         }
     }
     /// Reals at their own width: an f32 goes through f64 and back exactly.
-    fn reals<R: Real>(&mut self, v: &[R]) {
+    pub(super) fn reals<R: Real>(&mut self, v: &[R]) {
         for &x in v {
             match std::mem::size_of::<R>() {
                 4 => self.0.extend_from_slice(&(x.to_f64() as f32).to_le_bytes()),
@@ -91,19 +90,19 @@ impl Writer {
 }
 
 /// Reads a checkpoint's fields in order; every shortfall is an error naming what was cut off.
-struct Reader<'a> {
-    bytes: &'a [u8],
-    at: usize,
+pub(super) struct Reader<'a> {
+    pub(super) bytes: &'a [u8],
+    pub(super) at: usize,
 }
 
 impl<'a> Reader<'a> {
-    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
+    pub(super) fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
         let end = self.at.checked_add(n).filter(|&e| e <= self.bytes.len()).ok_or_else(|| format!("ends inside {what}"))?;
         let out = &self.bytes[self.at..end];
         self.at = end;
         Ok(out)
     }
-    fn u8(&mut self, what: &str) -> Result<u8, String> {
+    pub(super) fn u8(&mut self, what: &str) -> Result<u8, String> {
         Ok(self.take(1, what)?[0])
     }
     fn u32(&mut self, what: &str) -> Result<u32, String> {
@@ -380,143 +379,5 @@ impl Checkpoint {
         sim.diagnostics = self.diagnostics;
         [sim.solves, sim.divergence_solves, sim.density_solves] = self.solves;
         Ok(())
-    }
-}
-
-/// Writes the first `n` particles of each carried array, an optional array after a flag that
-/// says whether the run holds it.
-struct WriteCarried<'w, R> {
-    w: &'w mut Writer,
-    n: usize,
-    real: PhantomData<R>,
-}
-
-impl<'a, R: Real> VisitCarried<&'a [ParticleArray<f64>], &'a [ParticleArray<R>], &'a [ParticleArray<u32>]>
-    for WriteCarried<'_, R>
-{
-    fn wide(&mut self, _: Carried, components: &'a [ParticleArray<f64>]) {
-        for c in components {
-            self.w.f64s(&c[..self.n]);
-        }
-    }
-    fn real(&mut self, _: Carried, components: &'a [ParticleArray<R>]) {
-        for c in components {
-            self.w.reals(&c[..self.n]);
-        }
-    }
-    fn index(&mut self, _: Carried, components: &'a [ParticleArray<u32>]) {
-        for c in components {
-            for &id in &c[..self.n] {
-                self.w.u32(id);
-            }
-        }
-    }
-    fn real_where(&mut self, array: Carried, components: Option<&'a [ParticleArray<R>]>) {
-        self.w.u8(u8::from(components.is_some()));
-        if let Some(components) = components {
-            self.real(array, components);
-        }
-    }
-}
-
-/// Reads each carried array back as [`WriteCarried`] wrote it in format `version`: an optional
-/// array the version did not keep is absent. The first error stops the reading.
-struct ReadCarried<'b, R> {
-    r: Reader<'b>,
-    n: usize,
-    real_bytes: usize,
-    version: u32,
-    result: Result<(), String>,
-    real: PhantomData<R>,
-}
-
-impl<R> ReadCarried<'_, R> {
-    /// Each component's `n` entries of `width` bytes, decoded by `from`; an array the format
-    /// version did not keep keeps what the run set up.
-    fn read<T>(&mut self, array: Carried, components: &mut [ParticleArray<T>], width: usize, from: impl Fn(&[u8]) -> T) {
-        if self.version < array.since {
-            return;
-        }
-        for c in components {
-            if self.result.is_err() {
-                return;
-            }
-            match self.r.take(self.n * width, array.what) {
-                Ok(bytes) => {
-                    for (v, b) in c[..self.n].iter_mut().zip(bytes.chunks_exact(width)) {
-                        *v = from(b);
-                    }
-                }
-                Err(e) => self.result = Err(e),
-            }
-        }
-    }
-}
-
-impl<'a, R: Real> VisitCarried<&'a mut [ParticleArray<f64>], &'a mut [ParticleArray<R>], &'a mut [ParticleArray<u32>]>
-    for ReadCarried<'_, R>
-{
-    fn wide(&mut self, array: Carried, components: &'a mut [ParticleArray<f64>]) {
-        self.read(array, components, 8, |b| f64::from_le_bytes(b.try_into().expect("8 bytes")));
-    }
-    fn real(&mut self, array: Carried, components: &'a mut [ParticleArray<R>]) {
-        let real = |b: &[u8]| match b.len() {
-            4 => R::from_f64(f32::from_le_bytes(b.try_into().expect("4 bytes")) as f64),
-            _ => R::from_f64(f64::from_le_bytes(b.try_into().expect("8 bytes"))),
-        };
-        self.read(array, components, self.real_bytes, real);
-    }
-    fn index(&mut self, array: Carried, components: &'a mut [ParticleArray<u32>]) {
-        self.read(array, components, 4, |b| u32::from_le_bytes(b.try_into().expect("4 bytes")));
-    }
-    fn real_where(&mut self, array: Carried, components: Option<&'a mut [ParticleArray<R>]>) {
-        if self.result.is_err() {
-            return;
-        }
-        // A version before the array's kept none, and has no flag for it.
-        let held = match self.version >= array.since {
-            true => self.r.u8(array.what).map(|flag| flag == 1),
-            false => Ok(false),
-        };
-        match (components, held) {
-            (_, Err(e)) => self.result = Err(e),
-            (Some(components), Ok(true)) => self.real(array, components),
-            (None, Ok(false)) => {}
-            (Some(_), Ok(false)) => self.result = Err(format!("holds none of {}, which the scene's run carries", array.what)),
-            (None, Ok(true)) => self.result = Err(format!("holds {}, which the scene's run does not carry", array.what)),
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::simulation::particles::ModelFields;
-
-    /// The latest format version that kept each carried array.
-    struct Latest(u32);
-
-    impl<'a> VisitCarried<&'a [ParticleArray<f64>], &'a [ParticleArray<f64>], &'a [ParticleArray<u32>]> for Latest {
-        fn wide(&mut self, array: Carried, _: &'a [ParticleArray<f64>]) {
-            self.0 = self.0.max(array.since);
-        }
-        fn real(&mut self, array: Carried, _: &'a [ParticleArray<f64>]) {
-            self.0 = self.0.max(array.since);
-        }
-        fn index(&mut self, array: Carried, _: &'a [ParticleArray<u32>]) {
-            self.0 = self.0.max(array.since);
-        }
-    }
-
-    /// An array added to the carried state names the format version that first keeps it, and
-    /// the checkpoint writes that version or a later one.
-    #[test]
-    fn the_format_version_keeps_every_carried_array() {
-        let every = ModelFields { density_rate: true, implicit: true, pressure_solve: true, ..ModelFields::default() };
-        let p = Particles::<f64>::with_capacity(1, every);
-        let mut latest = Latest(0);
-        crate::visit_carried!(ref &mut latest; p);
-        assert!(latest.0 <= FORMAT_VERSION, "an array kept since version {} > {FORMAT_VERSION}", latest.0);
-        assert!(latest.0 >= 5, "the pressure solves' state, since version 5, is visited");
     }
 }

@@ -2,6 +2,7 @@
 //! as it goes.
 
 pub mod checkpoint;
+mod checkpoint_arrays;
 pub mod fields;
 pub mod folder;
 mod frames;
