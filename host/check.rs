@@ -2,10 +2,10 @@
 //! limiting term, memory, and a wall-time estimate from a short calibration run on this machine.
 
 use crate::cpu::simulation::CpuSimulation;
+use crate::scene::inlet::Inlet;
 use crate::scene::setup::{initial_particles, InitialParticles};
 use crate::scene::{Boundary, Domain, FluidBlock, Precision, Pressure, Scene, SceneError};
 use crate::simulation::backend::Backend as _;
-use crate::simulation::inlet::Inlet;
 use crate::simulation::model::Model;
 use crate::simulation::variant::{with_precision_and_model, WithModel};
 #[cfg(feature = "cuda")]

@@ -14,6 +14,7 @@
 //! bytes before it, so a damaged file is refused rather than misread.
 
 use super::checkpoint_arrays::{ReadCarried, WriteCarried};
+use super::checkpoint_bytes::{Reader, Writer};
 use super::fields::fingerprint;
 use super::summary::{Tally, WrittenFile};
 use crate::fnv1a::fnv1a;
@@ -33,7 +34,7 @@ const MAGIC: &[u8; 8] = b"COILCKPT";
 /// is set (a version 3 checkpoint, which has neither, is read as unset). 5: then a flag and
 /// the pressure solves' stiffness sums where pressure is solved. 6: then the iterations of the
 /// run's implicit viscosity, divergence and density solves, which its summary reports.
-pub(super) const FORMAT_VERSION: u32 = 6;
+const FORMAT_VERSION: u32 = 6;
 
 /// The largest checkpoint read (bytes): a billion particles in f64.
 const MAX_CHECKPOINT_BYTES: u64 = 1 << 37;
@@ -51,81 +52,6 @@ fn limit_code(limit: Limit) -> u8 {
 
 fn limit_from(code: u8) -> Option<Limit> {
     [Limit::Acoustic, Limit::Viscous, Limit::Velocity, Limit::Fixed, Limit::Cfl, Limit::Largest].get(usize::from(code)).copied()
-}
-
-/// Appends fields to a checkpoint's bytes.
-pub(super) struct Writer(pub(super) Vec<u8>);
-
-impl Writer {
-    pub(super) fn u8(&mut self, v: u8) {
-        self.0.push(v);
-    }
-    pub(super) fn u32(&mut self, v: u32) {
-        self.0.extend_from_slice(&v.to_le_bytes());
-    }
-    pub(super) fn u64(&mut self, v: u64) {
-        self.0.extend_from_slice(&v.to_le_bytes());
-    }
-    pub(super) fn f64(&mut self, v: f64) {
-        self.0.extend_from_slice(&v.to_le_bytes());
-    }
-    /// `None` as NaN, which no time or dt of a run can be.
-    fn optional_f64(&mut self, v: Option<f64>) {
-        self.f64(v.unwrap_or(f64::NAN));
-    }
-    pub(super) fn f64s(&mut self, v: &[f64]) {
-        for &x in v {
-            self.f64(x);
-        }
-    }
-    /// Reals at their own width: an f32 goes through f64 and back exactly.
-    pub(super) fn reals<R: Real>(&mut self, v: &[R]) {
-        for &x in v {
-            match std::mem::size_of::<R>() {
-                4 => self.0.extend_from_slice(&(x.to_f64() as f32).to_le_bytes()),
-                _ => self.f64(x.to_f64()),
-            }
-        }
-    }
-}
-
-/// Reads a checkpoint's fields in order; every shortfall is an error naming what was cut off.
-pub(super) struct Reader<'a> {
-    pub(super) bytes: &'a [u8],
-    pub(super) at: usize,
-}
-
-impl<'a> Reader<'a> {
-    pub(super) fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
-        let end = self.at.checked_add(n).filter(|&e| e <= self.bytes.len()).ok_or_else(|| format!("ends inside {what}"))?;
-        let out = &self.bytes[self.at..end];
-        self.at = end;
-        Ok(out)
-    }
-    pub(super) fn u8(&mut self, what: &str) -> Result<u8, String> {
-        Ok(self.take(1, what)?[0])
-    }
-    fn u32(&mut self, what: &str) -> Result<u32, String> {
-        Ok(u32::from_le_bytes(self.take(4, what)?.try_into().expect("4 bytes")))
-    }
-    fn u64(&mut self, what: &str) -> Result<u64, String> {
-        Ok(u64::from_le_bytes(self.take(8, what)?.try_into().expect("8 bytes")))
-    }
-    fn f64(&mut self, what: &str) -> Result<f64, String> {
-        Ok(f64::from_le_bytes(self.take(8, what)?.try_into().expect("8 bytes")))
-    }
-    fn optional_f64(&mut self, what: &str) -> Result<Option<f64>, String> {
-        let v = self.f64(what)?;
-        Ok((!v.is_nan()).then_some(v))
-    }
-    /// A count of `size`-byte items that must fit in what is left.
-    fn count(&mut self, size: usize, what: &str) -> Result<usize, String> {
-        let n = self.u64(what)?;
-        usize::try_from(n)
-            .ok()
-            .filter(|&n| n.checked_mul(size).is_some_and(|b| b <= self.bytes.len() - self.at))
-            .ok_or_else(|| format!("claims {n} {what}, more than the file holds"))
-    }
 }
 
 /// A checkpoint read from disk, its particle arrays still encoded until they are restored into
@@ -379,5 +305,40 @@ impl Checkpoint {
         sim.diagnostics = self.diagnostics;
         [sim.solves, sim.divergence_solves, sim.density_solves] = self.solves;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::simulation::carried_state::{Carried, VisitCarried};
+    use crate::simulation::particle_array::ParticleArray;
+    use crate::simulation::particles::ModelFields;
+
+    /// The latest format version that kept each carried array.
+    struct Latest(u32);
+
+    impl<'a> VisitCarried<&'a [ParticleArray<f64>], &'a [ParticleArray<f64>], &'a [ParticleArray<u32>]> for Latest {
+        fn wide(&mut self, array: Carried, _: &'a [ParticleArray<f64>]) {
+            self.0 = self.0.max(array.since);
+        }
+        fn real(&mut self, array: Carried, _: &'a [ParticleArray<f64>]) {
+            self.0 = self.0.max(array.since);
+        }
+        fn index(&mut self, array: Carried, _: &'a [ParticleArray<u32>]) {
+            self.0 = self.0.max(array.since);
+        }
+    }
+
+    /// An array added to the carried state names the format version that first keeps it, and
+    /// the checkpoint writes that version or a later one.
+    #[test]
+    fn the_format_version_keeps_every_carried_array() {
+        let every = ModelFields { density_rate: true, implicit: true, pressure_solve: true, ..ModelFields::default() };
+        let p = Particles::<f64>::with_capacity(1, every);
+        let mut latest = Latest(0);
+        crate::visit_carried!(ref &mut latest; p);
+        assert!(latest.0 <= FORMAT_VERSION, "an array kept since version {} > {FORMAT_VERSION}", latest.0);
+        assert!(latest.0 >= 5, "the pressure solves' state, since version 5, is visited");
     }
 }

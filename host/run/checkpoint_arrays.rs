@@ -2,9 +2,7 @@
 //! order, an optional array after a flag that says whether the run holds it, and read back as
 //! the format version that wrote them kept them.
 
-#[cfg(test)]
-use super::checkpoint::FORMAT_VERSION;
-use super::checkpoint::{Reader, Writer};
+use super::checkpoint_bytes::{Reader, Writer};
 use crate::simulation::carried_state::{Carried, VisitCarried};
 use crate::simulation::particle_array::ParticleArray;
 use coil_kernels::Real;
@@ -112,38 +110,5 @@ impl<'a, R: Real> VisitCarried<&'a mut [ParticleArray<f64>], &'a mut [ParticleAr
             (Some(_), Ok(false)) => self.result = Err(format!("holds none of {}, which the scene's run carries", array.what)),
             (None, Ok(true)) => self.result = Err(format!("holds {}, which the scene's run does not carry", array.what)),
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::simulation::particles::{ModelFields, Particles};
-
-    /// The latest format version that kept each carried array.
-    struct Latest(u32);
-
-    impl<'a> VisitCarried<&'a [ParticleArray<f64>], &'a [ParticleArray<f64>], &'a [ParticleArray<u32>]> for Latest {
-        fn wide(&mut self, array: Carried, _: &'a [ParticleArray<f64>]) {
-            self.0 = self.0.max(array.since);
-        }
-        fn real(&mut self, array: Carried, _: &'a [ParticleArray<f64>]) {
-            self.0 = self.0.max(array.since);
-        }
-        fn index(&mut self, array: Carried, _: &'a [ParticleArray<u32>]) {
-            self.0 = self.0.max(array.since);
-        }
-    }
-
-    /// An array added to the carried state names the format version that first keeps it, and
-    /// the checkpoint writes that version or a later one.
-    #[test]
-    fn the_format_version_keeps_every_carried_array() {
-        let every = ModelFields { density_rate: true, implicit: true, pressure_solve: true, ..ModelFields::default() };
-        let p = Particles::<f64>::with_capacity(1, every);
-        let mut latest = Latest(0);
-        crate::visit_carried!(ref &mut latest; p);
-        assert!(latest.0 <= FORMAT_VERSION, "an array kept since version {} > {FORMAT_VERSION}", latest.0);
-        assert!(latest.0 >= 5, "the pressure solves' state, since version 5, is visited");
     }
 }

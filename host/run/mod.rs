@@ -3,6 +3,7 @@
 
 pub mod checkpoint;
 mod checkpoint_arrays;
+mod checkpoint_bytes;
 pub mod fields;
 pub mod folder;
 mod frames;

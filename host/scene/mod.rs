@@ -2,6 +2,7 @@
 //! (`deny_unknown_fields`), validated once at load, then turned into plain `Copy` parameter
 //! structs for the kernels.
 
+pub mod inlet;
 pub mod load;
 pub mod logged;
 pub mod material;

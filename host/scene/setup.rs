@@ -1,8 +1,8 @@
 //! Initial particles of a scene: fluid blocks and boundary walls on the particle lattice.
 
+use crate::scene::inlet::Inlet;
 use crate::scene::particle_limit::ParticleLimit;
 use crate::scene::{Boundary, DensityEquation, DensityKernelKind, Pressure, Scene, SceneError};
-use crate::simulation::inlet::Inlet;
 use coil_kernels::smoothing::SmoothingKernels;
 use coil_kernels::{Real, Vec3};
 use std::collections::HashMap;

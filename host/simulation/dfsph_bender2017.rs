@@ -3,9 +3,9 @@
 //! before the model's accelerations, the density solve on the acceleration after them, and,
 //! with the continuity density, the density rate the density solve predicts.
 
+use crate::scene::inlet::Inlet;
 use crate::scene::DivergenceFree;
 use crate::simulation::backend::Passes;
-use crate::simulation::inlet::Inlet;
 use crate::simulation::model::SolveReport;
 use crate::simulation::particles::PressureViews;
 use coil_kernels::cell_grid::Neighbors;

@@ -4,9 +4,9 @@
 //! shear-thinning one per particle. Each is a type, so the CPU loops and the GPU kernels of a run contain only the
 //! physics it uses.
 
+use crate::scene::inlet::Inlet;
 use crate::scene::Viscosity;
 use crate::simulation::backend::Passes;
-use crate::simulation::inlet::Inlet;
 use crate::simulation::particles::ImplicitViews;
 pub use crate::simulation::particles::ModelFields;
 use coil_kernels::acceleration::AccelerationArgs;

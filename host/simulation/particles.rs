@@ -3,6 +3,7 @@
 use std::marker::PhantomData;
 use std::ops::{Deref, DerefMut};
 
+use crate::scene::inlet::NewParticles;
 use crate::scene::Pressure;
 use crate::scene::{DensityEquation, Scene};
 use crate::simulation::carried_state::{Carried, Start, VisitCarried};
@@ -317,6 +318,13 @@ impl<R: Real> Particles<R> {
 
     pub fn id_view(&self) -> View<'_, u32> {
         View::new(&self.id[..self.len])
+    }
+}
+
+impl<R: Real> NewParticles for Particles<R> {
+    fn add(&mut self, id: u32, position: [f64; 3], velocity: [f64; 3], density: f64) {
+        self.push(id, position, velocity);
+        self.density[self.len - 1] = R::from_f64(density);
     }
 }
 

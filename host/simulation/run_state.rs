@@ -3,8 +3,8 @@
 
 use super::{Diagnostics, Instability, Solve, UnconvergedSolve};
 use crate::run::summary::Solves;
+use crate::scene::inlet::Inlet;
 use crate::scene::{DensityKernelKind, DivergenceFree, ImplicitViscosity, NoConvergence, ViscousVelocity};
-use crate::simulation::inlet::Inlet;
 use crate::simulation::model::{Model, SolveReport};
 use crate::simulation::particles::Particles;
 use crate::time_step::{Limit, TimeStepper};

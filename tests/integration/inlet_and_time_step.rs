@@ -29,13 +29,8 @@ fn delivered_mass_rate(text: &str, nominal_area: f64) {
 }
 
 fn layer_size(scene: &coil::scene::Scene) -> f64 {
-    let inlet = coil::simulation::inlet::Inlet::new(
-        &scene.inlets[0],
-        scene.material.particle_spacing_m,
-        scene.support_radius(),
-        1.0,
-        1.0,
-    );
+    let inlet =
+        coil::scene::inlet::Inlet::new(&scene.inlets[0], scene.material.particle_spacing_m, scene.support_radius(), 1.0, 1.0);
     inlet.layer_size() as f64
 }
 
@@ -147,7 +142,7 @@ fn inlet_stops_at_the_particle_budget_and_moving_nozzle_follows_waypoints() {
         &["simulation.max_fluid_particles=500"],
     );
     let scene = common::scene(&text);
-    let inlet = coil::simulation::inlet::Inlet::new(&scene.inlets[0], 0.002, 0.004, 1.0, 1.0);
+    let inlet = coil::scene::inlet::Inlet::new(&scene.inlets[0], 0.002, 0.004, 1.0, 1.0);
     let (mid, v) = inlet.nozzle(0.05);
     assert!((mid[0] - 0.01).abs() < 1e-12 && (v[0] - 0.2).abs() < 1e-12);
     assert_eq!(inlet.nozzle(0.5).0, [0.02, 0.0, 0.0], "held at the last waypoint");

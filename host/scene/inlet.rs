@@ -7,7 +7,11 @@ use crate::splitmix64::{SplitMix64, GOLDEN_GAMMA};
 use coil_kernels::nozzle::NozzleTube;
 use coil_kernels::Real;
 
-use crate::simulation::particles::Particles;
+/// Where an inlet's new particles go: the solver's particles, or a device run's staging.
+pub trait NewParticles {
+    /// Adds a particle with its id, position (m), velocity (m/s) and density (kg/m^3).
+    fn add(&mut self, id: u32, position: [f64; 3], velocity: [f64; 3], density: f64);
+}
 
 /// A nozzle during a run.
 #[derive(Debug, Clone)]
@@ -238,7 +242,7 @@ impl Inlet {
 
     /// Advances the jet by `dt` from time `t` and appends every layer now due, while whole
     /// layers fit in `budget` more particles. Returns how many particles were added.
-    pub fn inject<R: Real>(&mut self, t: f64, dt: f64, budget: usize, next_id: &mut u32, p: &mut Particles<R>) -> usize {
+    pub fn inject(&mut self, t: f64, dt: f64, budget: usize, next_id: &mut u32, p: &mut impl NewParticles) -> usize {
         if t + dt < self.start || t >= self.stop {
             return 0;
         }
@@ -256,9 +260,7 @@ impl Inlet {
             let shift = [0, 1, 2].map(|k| along * self.direction[k] + a * self.across[0][k] + b * self.across[1][k]);
             for o in &self.layer {
                 let x = [0, 1, 2].map(|k| centre[k] + o[k] + shift[k]);
-                p.push(*next_id, x, velocity);
-                let last = p.len() - 1;
-                p.density[last] = R::from_f64(self.rest_density);
+                p.add(*next_id, x, velocity, self.rest_density);
                 *next_id += 1;
             }
             added += self.layer.len();
